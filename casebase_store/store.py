@@ -69,6 +69,7 @@ from features.fileio import (
     SQLITE_MAGIC,
     binary_kind,
     file_head,
+    path_exists,
     remove_stale_temporaries,
     temporary_prefix,
 )
@@ -2079,7 +2080,7 @@ def open_store(
     file = sqlite_file(url_or_path)
     if file is not None:
         check_name_length(file)
-    if file is not None and (readonly or not create) and not file.exists():
+    if file is not None and (readonly or not create) and not path_exists(file):
         raise StoreError("no such case base file", file)
     engine, where = _make_engine(url_or_path, timeout_s, readonly)
     store = CaseStore(engine, where, timeout_s, readonly)

@@ -23,7 +23,7 @@ from casebase_store import CaseBaseGone, CaseStore, StaleCaseError
 from features.errors import DataError, ParameterError, PosecbrError
 from features.poses import PoseSequence
 from features.progress import progress
-from features.text import shown
+from features.text import shown, spelt_as
 
 from .casebase import frames_of, piece_fields, piece_name, skeleton_of, subject_of
 from .described import poses_digest
@@ -166,7 +166,11 @@ def _classification(
     solved: Solved | str,
     target: str,
 ) -> Classification:
-    """One clip's answer from its :meth:`solve` result (or the reason it has none), explained."""
+    """One clip's answer from its :meth:`solve` result (or the reason it has none), explained;
+    ``truth`` as the case base writes it when it is one of its classes in other Unicode
+    characters (:func:`features.text.spelt_as`), so the clip is judged against that class."""
+    if truth is not None:
+        truth = spelt_as([truth], clf.classes_)[0]
     made_from = clip.metadata.get("made_from")
     made = None if made_from is None else str(made_from)
     piece = frames_of(clip) if "frame_offset" in clip.metadata else None
@@ -250,10 +254,13 @@ def check_feedback_label(
     activity of the case base (no class of it, for a case base predicting another ``target``
     column): a typo must not relabel a trained case or start a class. Refused with
     ParameterError naming the argument ``label`` (``classify`` says ``--feedback``, and
-    ``--new-label`` for ``new_label``)."""
+    ``--new-label`` for ``new_label``). A label that is an activity written in other Unicode
+    characters (:func:`features.text.spelt_as`) is that activity, as the case base spells it:
+    "Plié" typed was refused beside a stored "Plié" saved decomposed, and with ``new_label``
+    stored as a second activity that prints the same."""
     from .explain import class_noun
 
-    text = str(label).strip()
+    text = spelt_as([str(label).strip()], known)[0]
     noun = class_noun(target)
     if not text:
         raise ParameterError("the feedback label is empty", "label")

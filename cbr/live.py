@@ -431,6 +431,9 @@ class LiveSegmenter:
         self.beside: int | None = None  # the last repetition's first frame of the last
         # segment finished (None: it had none, or nobody was in view): what the stream's last
         # segment is judged beside when the stream ends (:meth:`_beside_whole`)
+        self.lost_from: tuple[int, int] | None = None  # the first frame of the repetition
+        # whose far point the person was lost at, left to the segment seen after if it is of
+        # the same activity (the label: the second), :meth:`_segment`
         self.waiting: _HeldBack | None = None  # the stream's first segment, held back until
         # the first repetition of the segment after it is known (:meth:`_hold`)
         self.released: list[LiveSegment] = []  # it, judged, not yet given
@@ -1155,9 +1158,16 @@ class LiveSegmenter:
         frames never show anybody is unknown, whatever the tie between its windows' evidence
         (every activity alike, known as likely as not) fell to. Nobody in view (``state``
         n_classes + 1): unknown, told so, counted 0, as offline; ``lost``: the segment after
-        this one is nobody in view, and a far point at the cut (the person lost from view
-        before coming back) is this segment's, as :func:`cbr.segmentation.counted_segments`
-        keeps it."""
+        this one is nobody in view: a far point at the cut (the person lost from view on the
+        way out to it, or held there) is left to the segment where the person is seen again,
+        as at a cut: that segment is counted from the far point's repetition on, through the
+        stretch with nobody in view (filled in, :attr:`lost_from`), as
+        :func:`cbr.segmentation.counted_segments` counts the movement on across it (down
+        into a squat, lost, seen again on the way up or standing: one repetition); where the
+        person is not seen again, no repetition was seen finished, and it counts none (the
+        way down of a squat, the person then lost). Before, this segment kept it: the way
+        down of a squat, the person then lost, counted 1, and seen again on the way up,
+        2."""
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = self.holding = False
@@ -1166,7 +1176,7 @@ class LiveSegmenter:
             return LiveSegment(
                 start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
             )
-        first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
+        first = self._first_counted(start, end, state)
         reps: tuple[Repetition, ...] = ()
         # the stream's own start and (once finished) end are the recording's, as offline
         # (cbr.segmentation._repetitions): part of one repetition there is none
@@ -1192,8 +1202,10 @@ class LiveSegmenter:
             reps, held, passed_on = self._held_on(first, end, edges, reps)
         mine = self._mine(start, first, end, reps, held, cut and not lost)
         counted = self._after_still(start, first, end, edges, reps)
-        kept = keep_whole(counted, first, end, self.step, turn or mine[0],
-                          cut and not lost and not mine[1], held)  # fmt: skip
+        kept = keep_whole(counted, first, end, self.step, turn or mine[0], cut and not mine[1],
+                          held)  # fmt: skip
+        left = self._left_when_lost(lost, counted, kept, end)
+        self.lost_from = None if left is None else (left, state)
         if cut:
             self._finished(reps, first, end, held, passed_on)
         kept = self._unless_got_into(kept, end, not cut and explained)
@@ -1207,6 +1219,35 @@ class LiveSegmenter:
         out = LiveSegment(start, end, label, float(confidence), count, text, novelty)
         self._hold(out, first, reps, held, cut and not lost)
         return out
+
+    def _first_counted(self, start: int, end: int, state: int) -> int:
+        """The first frame the repetitions of the segment of frames [start, end), labelled
+        ``state``, are counted from: at most its last :data:`MAX_SEGMENT_S` seconds of the
+        frames still kept; right after a segment with nobody in view (:attr:`last_cut`) that
+        took over from one of the same activity whose far point the person was lost at,
+        from that far point's repetition on (:attr:`lost_from`), across the stretch, as
+        offline (:func:`cbr.segmentation.counted_segments`: another activity after the
+        stretch does not finish it)."""
+        first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
+        lost_from, self.lost_from = self.lost_from, None
+        prior = self.last_cut
+        if lost_from is None or lost_from[1] != state:
+            return first
+        if prior is None or not prior.blind or prior.bounds[1] != start:
+            return first
+        return max(min(first, lost_from[0]), end - int(MAX_SEGMENT_S * self.fps), self.offset)
+
+    def _left_when_lost(
+        self, lost: bool, counted: tuple[Repetition, ...], kept: tuple[Repetition, ...], end: int
+    ) -> int | None:
+        """Of a segment finished at frame ``end`` where the person is lost from view
+        (``lost``; its repetitions ``counted``, ``kept`` by
+        :func:`cbr.segmentation.keep_whole`), the first frame of the repetition whose far
+        point, at the cut, it left to the segment where the person is seen again
+        (:attr:`lost_from`); None when it left none, or the person is not lost there."""
+        if lost and len(kept) < len(counted) and counted[-1].peak_frame >= end - self.step:
+            return counted[-1].start_frame
+        return None
 
     def _hold(
         self,
@@ -1384,7 +1425,8 @@ class LiveSegmenter:
         ``settled`` as there): on the movement signals of those frames and of up to
         :data:`CONTEXT_S` of the frames kept either side (none across a frame where the pose
         jumped to another person), which the running median and smoothing read across the
-        frames' ends as a whole recording's signals do at a cut. Before, on the frames' own
+        frames' ends as a whole recording's signals do at a cut (none beyond an end that is
+        the recording's: where the person was lost for good). Before, on the frames' own
         signals, which bend at their ends: a far point at a cut lay a sample off where
         ``segment`` found it, and the two gave it to different segments. DataError: the
         frames are shorter than one repetition can be (:data:`MIN_PERIOD_S`), or show
@@ -1396,6 +1438,8 @@ class LiveSegmenter:
         lo = max([self.offset, first - reach, *(j for j in self.jumps if j <= first)])
         lo = min(first, -(-lo // self.step) * self.step)  # on the stream's samples
         hi = min([self.n, end + reach, *(j for j in self.jumps if j >= end)])
+        if edges[1]:  # nothing beyond a recording's end (the person lost there for good)
+            hi = end
         sig = movement_signals(self._sequence(lo, hi))
         to_end = self.ended and end >= self.n
         found = repetitions_in(sig, first - lo, end - lo, to_end, edges, settled)
@@ -1579,7 +1623,14 @@ class LiveSegmenter:
             return []
         first = late[0][0]
         self.blind_hop = float(first)  # where the stretch lies (:meth:`_blind_end`)
-        return self._change(first, self.nobody)
+        if len(late) > 1 or late[0][1] < self.n:  # seen again before the stream's end
+            return self._change(first, self.nobody)
+        # lost for good: the segment ends as the stream would have there, as offline
+        # (cbr.segmentation._counted_seen): a far point cut off where the person was lost
+        # counts only beside a whole repetition
+        done = self._given(self._segment(self.seen_start, first, self.seen, False))
+        self.seen, self.seen_start, self.seen_sum, self.held = self.nobody, first, [0.0, 0.0], []
+        return done
 
     def _short_stream(self) -> list[LiveSegment]:
         """The segments of a stream that ended before its first window (:meth:`finish`): as

@@ -1137,6 +1137,7 @@ def counted_apart(
     unseen: Sequence[bool],
     jumps: Sequence[int],
     rec: PoseSequence,
+    states: Sequence[int] = (),
 ) -> list[tuple[Repetition, ...]]:
     """:func:`counted_segments` with every segment also cut at the frames ``jumps`` (where
     the pose jumped to another person, :func:`features.repetitions.person_jumps`), as at a
@@ -1153,7 +1154,7 @@ def counted_apart(
     in ``segment`` than in ``watch``, ``reps`` and by hand."""
     cuts = [0, *sorted({j for j in jumps if 0 < j < n_frames}), n_frames]
     if len(cuts) == 2:
-        return counted_segments(sig, bounds, n_frames, unseen)
+        return counted_segments(sig, bounds, n_frames, unseen, states)
     sides = tuple(_side_signals(rec, p, q) for p, q in zip(cuts[:-1], cuts[1:], strict=True))
     apart = _Apart(tuple(cuts), sides, sig.step)
     pieces: list[tuple[int, int]] = []
@@ -1176,6 +1177,7 @@ def counted_segments(
     bounds: Sequence[tuple[int, int]],
     n_frames: int,
     unseen: Sequence[bool] = (),
+    states: Sequence[int] = (),
 ) -> list[tuple[Repetition, ...]]:
     """The repetitions of every segment, frames ``bounds`` [start, end) in order covering the
     recording's ``n_frames``, each counted on its own frames (:func:`_repetitions`), each
@@ -1201,13 +1203,24 @@ def counted_segments(
     rises 20 degrees at the knees before the cut and sinks again after it): before, counted
     in both segments when either side turned back by :data:`MIN_EXCURSION_RAD` or more.
 
-    ``unseen``: per segment, whether nobody is in view in it (counted 0): the movement of the
-    segment before goes on out of sight, and that segment keeps a repetition whose far point
-    is at the cut (the person went down into a squat and was lost from view before coming
-    up), nothing it got into is held on across the cut, and no far point is held through the
-    stretch. Before, the squat was left to the stretch, which counts none, or taken for a
-    posture got into and held, and lost."""
+    ``unseen``: per segment, whether nobody is in view in it (counted 0). The segments are
+    then counted as ``reps`` counts the recording (:func:`_counted_seen`): from where the
+    person is first seen to where they are last seen, as a recording of its own (the view of
+    the movement ends where the person is lost for good, as at the recording's end: the way
+    down of a squat, the person then lost, is no repetition; before, the segment kept it as
+    one), and a stretch with nobody in view between two segments of the same activity
+    (``states``: each segment's, as decoded; none given: all alike) is part of the segment
+    before it (the activity goes on out of sight, filled in across the stretch: a squat
+    whose person is lost on the way down and seen again on the way up is one repetition;
+    before, it counted in both); between two of different activities, it ends the one
+    before and starts the one after as a recording's end and start do (the first 0.5 s of
+    a squat, 3 s with nobody in view, then knee raises: the squat's way down is none, as at
+    a recording's end; before, it counted 1). Counted across a jump of the pose to another
+    person (``sig`` of the pieces either side), the segment before a stretch with nobody
+    in view keeps a far point at its cut, as before."""
     blind = [bool(u) for u in unseen] + [False] * (len(bounds) - len(unseen))
+    if isinstance(sig, MovementSignals) and any(blind) and not all(blind):
+        return _counted_seen(sig, bounds, blind, states)
     raw = [
         () if b else _repetitions(sig, start, end, n_frames)
         for (start, end), b in zip(bounds, blind, strict=True)
@@ -1246,6 +1259,70 @@ def counted_segments(
             turn = False
     out = _held_into_the_end(sig, out, raw, bounds, held_on, after, n_frames)
     return _held_to_the_end(out, raw, bounds, blind)
+
+
+def _counted_seen(
+    sig: MovementSignals,
+    bounds: Sequence[tuple[int, int]],
+    blind: Sequence[bool],
+    states: Sequence[int],
+) -> list[tuple[Repetition, ...]]:
+    """:func:`counted_segments` of segments ``bounds`` some of which (``blind``, not all)
+    show nobody: the segments that show the person, in runs that a stretch with nobody in
+    view between two different activities (``states``) ends, each run counted as a recording
+    of its own (its start and end the recording's, as ``reps`` counts a recording whose
+    person is first seen late or lost for good early,
+    :func:`features.repetitions.seen_frames`), each of its segments with the segments with
+    nobody in view after it up to the next in the run (the movement filled in across them,
+    as ``reps`` fills it in); the repetitions so counted are the segment's, cut to its
+    frames, and a segment with nobody in view counts none."""
+    seen = [k for k, b in enumerate(blind) if not b]
+    runs = [[seen[0]]]
+    for k, q in zip(seen[:-1], seen[1:], strict=True):
+        alike = q == k + 1 or len(states) <= q or states[k] == states[q]
+        if alike:
+            runs[-1].append(q)
+        else:
+            runs.append([q])
+    out: list[tuple[Repetition, ...]] = [() for _ in bounds]
+    for run in runs:
+        for k, reps in zip(run, _counted_run(sig, bounds, run), strict=True):
+            out[k] = reps
+    return out
+
+
+def _counted_run(
+    sig: MovementSignals, bounds: Sequence[tuple[int, int]], run: Sequence[int]
+) -> list[tuple[Repetition, ...]]:
+    """The repetitions of segments ``run`` (indices of ``bounds``, ascending, all showing
+    the person) counted as a recording of their own from the first's start to the last's
+    end, each with the frames after it up to the next (:func:`_counted_seen`), in the
+    recording's frames, cut to each segment's own."""
+    nxt = [*run[1:], None]
+    groups = [(bounds[k][0], bounds[q][0] if q is not None else bounds[k][1]) for k, q in
+              zip(run, nxt, strict=True)]  # fmt: skip
+    step = sig.step
+    a0, b0 = groups[0][0] // step, -(-groups[-1][1] // step)
+    off = a0 * step
+    # the run starts as a recording does: from its first sample (up to a step of frames
+    # with nobody in view before the first segment, filled in)
+    inner = [(0 if i == 0 else a - off, b - off) for i, (a, b) in enumerate(groups)]
+    found = counted_segments(sig.part(a0, b0), inner, groups[-1][1] - off)
+    out = []
+    for k, reps in zip(run, found, strict=True):
+        start, end = bounds[k]
+        out.append(tuple(
+            Repetition(
+                max(start, r.start_frame + off),
+                min(end, r.end_frame + off),
+                min(end - 1, max(start, r.peak_frame + off)),
+                r.side,
+                r.held,
+                r.unreturned,
+            )
+            for r in reps
+        ))  # fmt: skip
+    return out
 
 
 def unclaimed(
@@ -1729,7 +1806,8 @@ def finish(clf: Any, done: SolvedRecording, judge: Judge) -> Segmentation:
     runs = _runs(_slivers_beside_nobody(path, n_classes))
     bounds = [_frames_of(a, b, rec.fps, rec.n_frames) for a, b, _ in runs]
     unseen = [s > n_classes for *_, s in runs]
-    reps = counted_apart(done.sig, bounds, rec.n_frames, unseen, person_jumps(rec), rec)
+    states = [s for *_, s in runs]
+    reps = counted_apart(done.sig, bounds, rec.n_frames, unseen, person_jumps(rec), rec, states)
     pieces = _LastPiece()
     segments = tuple(
         _nobody_segment(rec, a, b)

@@ -19,11 +19,14 @@ dask is an optional dependency (``pip install 'posecbr[cluster]'``): without it,
 
 from __future__ import annotations
 
+import asyncio
 import difflib
 import gc
+import importlib
 import logging
 import os
 import re
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError
@@ -95,6 +98,7 @@ def local_workers(spec: str) -> int | None:
         if not spec.strip():
             raise ParameterError("the scheduler address is empty", "scheduler")
         _refuse_mistyped_local(spec)
+        _refuse_impossible_port(spec)
         return None
     text = spec[len(LOCAL_PREFIX) :]
     # isdigit() holds for "²", which int() refuses; isdecimal() for what int() reads
@@ -121,6 +125,29 @@ def _refuse_mistyped_local(spec: str) -> None:
             f"local:{int(m['n'])}?)",
             "scheduler",
         )
+
+
+def _refuse_impossible_port(spec: str) -> None:
+    """Refuse a scheduler address whose port no program can listen on (0, above 65535, not a
+    number): Dask tried to connect to ``:0`` or ``:99999`` for :data:`CONNECT_TIMEOUT_S`
+    seconds, after the command had listed its clips. An address that is no URL is left to
+    Dask, which says what is wrong with it."""
+    try:
+        parts = urlsplit(spec if "://" in spec else f"tcp://{spec}")
+    except ValueError:  # "[::1" and the like
+        return
+    if parts.scheme == "inproc":  # a process's own address, no port
+        return
+    try:
+        port = parts.port
+    except ValueError:  # not a number, or out of range
+        port = 0
+    if port is not None and not 1 <= port <= 65535:
+        said = (
+            f"the scheduler address {spec} has the port {parts.netloc.rpartition(':')[2]!r}: a "
+            "port is a number from 1 to 65535 (Dask's scheduler listens on 8786)"
+        )
+        raise ParameterError(_without_password(said, spec), "scheduler")
 
 
 def check_scheduler(spec: str | None) -> None:
@@ -173,7 +200,10 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
         return
     refused: ConfigError | None = None
     try:
+        _refuse_other_than_a_scheduler(spec)
         client = dd.Client(spec, timeout=CONNECT_TIMEOUT_S)
+    except ConfigError as exc:
+        refused = exc
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         # TypeError: a scheme this Dask cannot connect by as set up (tls:// without
         # certificates, ucx:// without UCX)
@@ -199,6 +229,77 @@ def connect(spec: str, lean: bool = True) -> Iterator[Any]:
             raise ConfigError(_without_password(said, spec), "scheduler") from None
         finally:
             client.close()
+
+
+#: seconds a program that took the connection has to answer Dask's greeting, after
+#: :data:`CONNECT_TIMEOUT_S` to connect
+ANSWER_TIMEOUT_S = 5
+
+
+def _refuse_other_than_a_scheduler(spec: str) -> None:
+    """Refuse ``spec`` unless a Dask scheduler answers there, within :data:`CONNECT_TIMEOUT_S`
+    and :data:`ANSWER_TIMEOUT_S`. Dask's client waits for the greeting of what it connected
+    to without a deadline: a port where another program listens and says nothing (Dask's
+    dashboard, 8787, for its scheduler's 8786: an HTTP server waits for a request line) hung
+    the command for good. A Dask worker's or nanny's address is named as such (Dask said
+    "Worker.identity() got an unexpected keyword argument", under its warnings). Asked on a
+    thread of its own, so that a caller's running event loop (a notebook's) is no matter;
+    OSError, TimeoutError, ValueError and TypeError as the client raises them."""
+    asked: list[Any] = []
+
+    def ask() -> None:
+        try:
+            asked.append(asyncio.run(asyncio.wait_for(_identity(spec), deadline)))
+        except BaseException as exc:  # to be raised on the caller's thread
+            asked.append(exc)
+
+    deadline = CONNECT_TIMEOUT_S + ANSWER_TIMEOUT_S
+    thread = threading.Thread(target=ask, name="posecbr-scheduler-check", daemon=True)
+    thread.start()
+    thread.join()
+    (got,) = asked
+    if isinstance(got, TimeoutError):  # the deadline's: Dask's own are OSErrors
+        said = (
+            f"{spec} took the connection but did not answer as a Dask scheduler (another "
+            "program's port? Dask's scheduler listens on 8786, its dashboard on 8787)"
+        )
+        raise ConfigError(_without_password(said, spec), "scheduler")
+    if isinstance(got, BaseException):
+        raise got
+    kind = got.get("type") if isinstance(got, dict) else None
+    if not isinstance(kind, str):
+        said = f"{spec} answered, but not as a Dask scheduler"
+        raise ConfigError(_without_password(said, spec), "scheduler")
+    if kind in _NOT_SCHEDULERS:
+        said = f"{spec} is {_NOT_SCHEDULERS[kind]}, not the scheduler's"
+        if got.get("scheduler"):
+            said += f" (its scheduler: {got['scheduler']})"
+        raise ConfigError(_without_password(said, spec), "scheduler")
+
+
+#: the Dask servers that are no scheduler, by their identity's type
+_NOT_SCHEDULERS = {
+    "Worker": "a Dask worker's address",
+    "Nanny": "a Dask nanny's address (the process that starts a worker)",
+}
+
+
+async def _identity(spec: str) -> Any:
+    """What the Dask server at ``spec`` says it is (its ``identity``): a scheduler asked for
+    none of its workers; another server (a worker, a nanny), which takes no such argument,
+    asked again without it."""
+    comms = importlib.import_module("distributed.comm")  # untyped: its attributes are Any
+    args = _dask().Security().get_connection_args("client")
+    comm = await comms.connect(spec, timeout=CONNECT_TIMEOUT_S, **args)
+    try:
+        await comm.write({"op": "identity", "n_workers": 0, "reply": True})
+        got = await comm.read()
+        if not (isinstance(got, dict) and "type" in got):
+            await comm.write({"op": "identity", "reply": True})
+            got = await comm.read()
+        return got
+    finally:
+        await comm.close()
 
 
 def _without_password(text: str, spec: str) -> str:
@@ -341,8 +442,20 @@ class _Batch:
         self.sent = [0] * len(items)
 
     def _scatter(self) -> list[Any]:
-        # each argument scattered as one object (a list would be scattered element by element)
-        return [self.client.scatter([a], broadcast=True, hash=False)[0] for a in self.args]
+        """The shared arguments on every worker. Refused when the cluster has no worker (the
+        scheduler waits the client's timeout for one): none joined a scheduler of the user's,
+        or the last one died mid-run, its nanny too (an internal error, Dask's TimeoutError
+        "No valid workers found", where a worker that died alone is started again)."""
+        try:
+            # each argument scattered as one object (a list is scattered element by element)
+            return [self.client.scatter([a], broadcast=True, hash=False)[0] for a in self.args]
+        except TimeoutError:
+            raise ConfigError(
+                "the Dask cluster has no worker to run the work on (none joined its scheduler "
+                "in time, or every one stopped mid-run): start workers and run the command "
+                "again",
+                "scheduler",
+            ) from None
 
     def _again(self, i: int, generation: int) -> Any:
         """Item ``i`` sent again; the arguments scattered anew unless that was done since the

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from features.errors import ConfigError
+from features.fileio import binary_kind
 
 # A configuration file is a few kilobytes; anything far larger is the wrong file.
 MAX_CONFIG_BYTES = 10 * 1024**2
@@ -40,10 +41,20 @@ def _read_text(path: Path, what: str) -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise ConfigError(
-            f"the {what} is not UTF-8 text ({exc.reason} at byte {exc.start}; a binary file?)",
-            path,
-        ) from None
+        raise ConfigError(f"the {what} is not UTF-8 text{_not_utf8(data, exc)}", path) from None
+
+
+def _not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
+    """What a configuration file that is not UTF-8 text is, after "is not UTF-8 text": UTF-16
+    (Notepad's "Unicode", PowerShell's ``>``) and the binary files a user has beside it (a
+    gzip-compressed copy, a case base) said as such, where every one was "a binary file?";
+    else where its first character that is not UTF-8 stands."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return ": it is UTF-16 (its byte order mark); save it as UTF-8"
+    if (kind := binary_kind(data[:512])) is not None:
+        return f": it is {kind}"
+    line = data.count(b"\n", 0, exc.start) + 1
+    return f" ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8"
 
 
 def read_config(

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import as_path, binary_kind, file_head, path_exists, picture_words
+from features.fileio import as_path, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
@@ -63,6 +63,7 @@ from .label_tracks import (
     read_label_track,
     refuse_inner_bom,
     track_labels,
+    utf8_text,
 )
 from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, pose_file_length, pose_file_metadata
 from .readers.asfamc import hdm05_metadata, read_asf_amc
@@ -683,7 +684,7 @@ def read_labels_csv(csv_path: str | Path, unlabelled: bool = False) -> list[dict
     ``unlabelled`` (clips to classify, not to train on: pieces of a new recording).
     """
     csv_path = Path(csv_path)
-    rows = _csv_rows(csv_path)
+    rows = _unnamed_columns_dropped(_csv_rows(csv_path), csv_path)
     header = _csv_header(rows[0], csv_path)
     records = (
         _csv_record(header, row, line_no, csv_path, unlabelled)
@@ -700,12 +701,10 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
         raise DataError("no such file", csv_path)
     rows: list[list[str]] = []
     try:
-        with csv_path.open(newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except UnicodeDecodeError as exc:
-        if (kind := binary_kind(file_head(csv_path))) is not None:  # a case base given as one
-            raise DataError(f"is {kind}, not a labels CSV", csv_path) from None
-        raise DataError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", csv_path) from None
+        data = csv_path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read the labels CSV ({exc.strerror or exc})", csv_path) from None
+    text = utf8_text(data, "labels CSV", csv_path)
     # two labels CSVs joined (cat a.csv b.csv), the second saved with a byte order mark: it
     # would begin a path or label unseen ("no such file \ufeffrec2.npz")
     refuse_inner_bom(text, "labels CSV", csv_path, "a path or label")
@@ -720,6 +719,27 @@ def _csv_rows(csv_path: Path) -> list[list[str]]:
             "empty CSV: a header row path,label[,subject][,start,end] is required", csv_path
         )
     return rows
+
+
+def _unnamed_columns_dropped(rows: list[list[str]], csv_path: Path) -> list[list[str]]:
+    """``rows`` without the columns the header leaves unnamed, which no row fills: the empty
+    columns a spreadsheet saves after the last one used (``path,label,,`` and ``a.npz,squat,,``:
+    Excel writes them once a cell out there has been touched), which were refused as
+    "repeated column names", or kept as a column named "". A value in an unnamed column is
+    refused naming its line and column: no name says what it is."""
+    unnamed = [i for i, name in enumerate(rows[0]) if not name.strip()]
+    if not unnamed or len(unnamed) == len(rows[0]):
+        return rows  # no column named at all: the header's own error says so
+    for line_no, row in enumerate(rows[1:], start=2):
+        filled = next((i for i in unnamed if i < len(row) and row[i].strip()), None)
+        if filled is not None:
+            raise DataError(
+                f"line {line_no}: column {filled + 1} holds {row[filled].strip()[:40]!r}, and"
+                " the header (line 1) gives that column no name",
+                csv_path,
+            )
+    drop = set(unnamed)
+    return [[c for i, c in enumerate(row) if i not in drop] for row in rows]
 
 
 def _csv_header(row: list[str], csv_path: Path) -> list[str]:

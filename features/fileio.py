@@ -25,6 +25,7 @@ replaces one of the inputs it was made from.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -94,6 +95,10 @@ def picture_words(head: bytes) -> str | None:
 SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+#: the first two bytes of every gzip file (RFC 1952)
+GZIP_MAGIC = b"\x1f\x8b"
+
+
 def binary_kind(head: bytes) -> str | None:
     """What a file whose first bytes are ``head`` is, when it is a binary file a user could
     give in the place of another (a case base, a pose file, a zip archive, a video, a
@@ -105,6 +110,8 @@ def binary_kind(head: bytes) -> str | None:
         return "a NumPy file, such as a pose file"
     if head.startswith(b"PK\x03\x04"):  # a .zip, an .xlsx spreadsheet: no arrays in it
         return "a zip archive, not a pose file"
+    if head.startswith(GZIP_MAGIC):  # a file kept compressed (x.txt.gz, x.csv.gz)
+        return "a gzip-compressed file (gunzip it first)"
     if (picture := picture_words(head)) is not None:  # before video: a HEIF photo's ftyp
         return picture
     if is_video(head):
@@ -591,7 +598,7 @@ def _identity(path: Path) -> tuple[Path, tuple[int, int] | None] | None:
     the output's file)."""
     try:
         resolved = path.resolve()
-    except OSError:
+    except (OSError, RuntimeError):  # RuntimeError: a loop of symbolic links (Python < 3.13)
         return None
     try:
         st = path.stat()
@@ -669,22 +676,42 @@ def as_path(value: Any, name: str) -> Path:
 
 def path_exists(path: Path, lead: str = "", where: Path | None = None) -> bool:
     """Whether ``path`` exists; a path the system cannot even look up (too long, a NUL
-    character) is a DataError naming ``where`` (default: the path), its message after
-    ``lead``."""
+    character, symbolic links that lead round in a loop) is a DataError naming ``where``
+    (default: the path), its message after ``lead``. Python's ``exists`` calls a loop of
+    links missing, and every input in one was refused as "no such file"."""
     try:
-        return path.exists()
+        return _exists(path)
     except (OSError, ValueError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        reason = _lookup_failed(exc)
         raise DataError(f"{lead}cannot use the path ({reason})", where or path) from None
+
+
+def _exists(path: Path) -> bool:
+    """``path.exists()``, but symbolic links that lead round in a loop raise the system's
+    OSError (ELOOP), which ``exists`` takes for a missing file."""
+    if path.exists():
+        return True
+    try:
+        os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return False
+    return True  # made between the two looks
+
+
+def _lookup_failed(exc: OSError | ValueError) -> str:
+    """Why the system could not look a path up, in words."""
+    if isinstance(exc, OSError) and exc.errno == errno.ELOOP:
+        return "symbolic links that lead round in a loop"
+    return exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
 
 
 def check_lookup(path: Path, what: str) -> None:
     """A DataError naming ``path`` when the system cannot even look it up (a file name over
     255 bytes): asked whether it is a folder, Python raises there, a traceback."""
     try:
-        path.exists()
+        _exists(path)
     except OSError as exc:
-        raise DataError(f"cannot use the {what} path ({exc.strerror or exc})", path) from None
+        raise DataError(f"cannot use the {what} path ({_lookup_failed(exc)})", path) from None
 
 
 def _refuse_special(out: Path, what: str) -> None:

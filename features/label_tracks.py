@@ -58,8 +58,20 @@ def _read_label_text(path: Path, what: str) -> str:
         data = path.read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read the {what} ({exc.strerror or exc})", path) from None
+    text = utf8_text(data, what, path)
+    refuse_inner_bom(text, what, path)
+    return text
+
+
+def utf8_text(data: bytes, what: str, path: Path) -> str:
+    """``data``, the bytes of the ``what`` file at ``path`` (a label file, a labels CSV), as
+    text, a UTF-8 byte order mark dropped; else one DataError naming the file and what it is:
+    a binary file a user could give in its place (a case base, a pose file, a gzip-compressed
+    copy), UTF-16 text (Excel's "Unicode Text", PowerShell's ``>``), or text in another
+    encoding (a Windows code page) by the line and byte of its first character that is not
+    UTF-8."""
     try:
-        text = data.decode("utf-8-sig")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         if (kind := binary_kind(data[:512])) is not None:  # a case base given as --truth
             raise DataError(f"is {kind}, not a {what}", path) from None
@@ -70,8 +82,6 @@ def _read_label_text(path: Path, what: str) -> str:
             f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
             path,
         ) from None
-    refuse_inner_bom(text, what, path)
-    return text
 
 
 def refuse_inner_bom(text: str, what: str, path: Path, part: str = "a label") -> None:
@@ -150,6 +160,7 @@ def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> l
     _refuse_a_labels_csv(text, path)
     _refuse_a_table(text, path)
     _refuse_a_header(text, tokens, path)
+    _refuse_empty_labels(text, path)
     if names is None:
         return tokens
     unknown = sorted({t for t in tokens if t not in names}, key=code_order)
@@ -210,6 +221,27 @@ def _refuse_semicolons(text: str, path: Path) -> None:
             raise DataError(
                 f"line {line_no}: labels separated by ';' ({line.strip()[:40]!r}); a label"
                 " file separates its labels by spaces, tabs, commas or line ends",
+                path,
+            )
+
+
+def _refuse_empty_labels(text: str, path: Path) -> None:
+    """Refuse a label file with an empty label between two commas (``1,1,,2``: a spreadsheet
+    row with a cell left empty, a frame or block nobody labelled), naming its first line
+    holding one: the separators run together, so every label after it was read one frame or
+    block early, and when the count still fitted (one label more than the frames need is
+    taken) nothing said so. Empty cells that end a line (a spreadsheet's shorter last row,
+    ``2,2,,``) are no label's place and are let be."""
+    lines = text.splitlines()
+    for line_no, line in enumerate(lines, start=1):
+        if (empty := re.search(r",[^\S\n]*,", line.rstrip(", \t"))) is not None:
+            before = "\n".join([*lines[: line_no - 1], line[: empty.start()]])
+            labels = [t for t in re.split(r"[\s,]+", before) if t]
+            after = f" after label {len(labels)} ({_short(labels[-1])!r})" if labels else ""
+            raise DataError(
+                f"line {line_no}: an empty label between commas{after}; a label file gives"
+                " every frame or block a label (read without one, the labels after it would"
+                " fall a frame or block early): write one there",
                 path,
             )
 

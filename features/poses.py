@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import ConfigError, DataError, InputError, PoseFileError
-from features.fileio import SQLITE_MAGIC, as_path, atomic_path, file_head
+from features.fileio import GZIP_MAGIC, SQLITE_MAGIC, as_path, atomic_path, file_head
 from features.text import size_words
 from features.values import is_number
 
@@ -584,6 +584,17 @@ def _npy_header(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> tuple
     return tuple(shape)
 
 
+def _not_a_zip(head: bytes) -> str:
+    """Why a pose file that is no zip archive, its first bytes ``head``, cannot be read: an
+    empty file and a gzip-compressed one said as such, where both were "truncated, or another
+    format?"."""
+    if not head:
+        return "cannot read pose file: the file is empty (0 bytes)"
+    if head.startswith(GZIP_MAGIC):  # clip.npz.gz, or gzip clip.npz kept as its name
+        return "cannot read pose file: it is gzip-compressed (gunzip it first)"
+    return "cannot read pose file: not an .npz archive (truncated, or another format?)"
+
+
 def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
     """Check a pose file before decompressing anything: a zip archive (not a renamed
     ``.npy``), whose arrays ``keys`` (None: all) are well-formed ``.npy`` members within the
@@ -599,9 +610,7 @@ def check_archive(path: Path, keys: Sequence[str] | None = None) -> None:
                 path,
             )
         if not zipfile.is_zipfile(path):
-            raise PoseFileError(
-                "cannot read pose file: not an .npz archive (truncated, or another format?)", path
-            )
+            raise PoseFileError(_not_a_zip(head), path)
         with zipfile.ZipFile(path) as zf:
             members = set(zf.namelist())
             wanted = [n.removesuffix(".npy") for n in members] if keys is None else keys

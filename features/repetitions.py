@@ -1362,7 +1362,9 @@ def count_repetitions(
     posture, no repetition (:func:`_held_change`); False for a piece cut out of a longer
     recording (a segment), whose far point at a cut is handed to the piece beyond it
     (:func:`cbr.segmentation.keep_whole`) and must stay; or a pair, for the clip's start and
-    its end (:func:`count_in_signals`). Raises DataError when the clip is
+    its end (:func:`count_in_signals`). A recording whose person is lost from view for good
+    before its end, or first seen after its start, is counted on the frames that show the
+    person (:func:`seen_frames`). Raises DataError when the clip is
     shorter than one repetition could be (:data:`MIN_PERIOD_S`) or shows no person, and
     InputError when ``seq`` is not a PoseSequence (an array: ``PoseSequence(xyz, names,
     fps)`` makes one)."""
@@ -1375,7 +1377,77 @@ def count_repetitions(
         )
     check_person(seq, "count")
     sig = movement_signals(seq)
+    a, b = seen_frames(seq, sig, recording_edges)
+    if (a, b) != (0, seq.n_frames):
+        return count_seen(seq, a, b, lambda piece: count_repetitions(piece, recording_edges))
     return count_in_signals(sig, seq.n_frames, seq.fps, recording_edges)
+
+
+def seen_frames(
+    seq: PoseSequence, sig: MovementSignals, recording_edges: bool | tuple[bool, bool] = True
+) -> tuple[int, int]:
+    """Frames [a, b) of recording ``seq`` whose movement signals are ``sig``, from the first
+    that shows the person to the last: without the stretch of at least
+    :data:`MIN_PERIOD_S` with nobody in view (:attr:`MovementSignals.blind`) that it starts
+    with, or ends with, where that is the recording's start or end (``recording_edges``, as
+    :func:`count_repetitions` takes it; at a cut into pieces, such a stretch is the
+    segmentation's: :func:`cbr.segmentation.counted_segments`). The whole recording when
+    neither, or when nobody is seen in it. Found on the samples of ``sig``, to the frame
+    within the sample: the first (last) with a joint seen.
+
+    The view of the movement ends where the person is lost for good, as it ends where the
+    recording does: counted on the frames that show the person (:func:`count_seen`), a far
+    point cut off there counts as one cut off by the recording's end (none without a whole
+    repetition: the way down of a squat, the person then lost, is no repetition). Before,
+    the posture last seen was held through the rest and smoothed into it, and such a far
+    point counted: the way down of a squat after two squats, then nobody, counted 3 where
+    the recording ending at the same frame counts 2."""
+    edges = (
+        (recording_edges, recording_edges)
+        if isinstance(recording_edges, bool)
+        else (bool(recording_edges[0]), bool(recording_edges[1]))
+    )
+    blind, step, n_frames = sig.blind, sig.step, seq.n_frames
+    if blind is None or not (blind[0] and edges[0] or blind[-1] and edges[1]):
+        return 0, n_frames
+    seen = np.flatnonzero(~blind)
+    if not len(seen):
+        return 0, n_frames
+    a, b = 0, n_frames
+    if edges[0] and blind[0]:  # the frames of the sample before the first seen, and its own
+        lo = max(0, (int(seen[0]) - 1) * step)
+        shown = _any_joint(seq.positions[lo : (int(seen[0]) + 1) * step])
+        a = lo + int(np.argmax(shown)) if shown.any() else int(seen[0]) * step
+    if edges[1] and blind[-1]:  # the last seen sample's frames, and the next sample's
+        lo = int(seen[-1]) * step
+        shown = _any_joint(seq.positions[lo : min(n_frames, lo + 2 * step)])
+        b = lo + int(np.flatnonzero(shown)[-1]) + 1 if shown.any() else lo + 1
+    return a, b
+
+
+def _any_joint(positions: np.ndarray) -> np.ndarray:
+    """``(frames,)`` whether any joint of ``positions`` ``(frames, joints, 3)`` is seen."""
+    return np.asarray(np.isfinite(positions).all(axis=2).any(axis=1))
+
+
+def count_seen(
+    seq: PoseSequence, a: int, b: int, count: Callable[[PoseSequence], RepetitionCount]
+) -> RepetitionCount:
+    """The repetitions of frames [a, b) of ``seq`` (:func:`seen_frames`), counted by
+    ``count`` as a clip of their own, the frames numbered in ``seq``: none when they are
+    shorter than one repetition could be (:data:`MIN_PERIOD_S`). The joint angles already
+    computed for ``seq`` are shared (:func:`features.derived.stretch`)."""
+    piece = stretch(seq, a, b)
+    if piece.duration_s < MIN_PERIOD_S:
+        return RepetitionCount((), seq.fps, seq.n_frames, None, 0.0, False, ())
+    found = count(piece)
+    reps = tuple(
+        dataclasses.replace(
+            r, start_frame=r.start_frame + a, end_frame=r.end_frame + a, peak_frame=r.peak_frame + a
+        )
+        for r in found.repetitions
+    )
+    return dataclasses.replace(found, repetitions=reps, n_frames=seq.n_frames)
 
 
 def person_jumps(seq: PoseSequence) -> list[int]:

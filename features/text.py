@@ -107,7 +107,28 @@ __all__ = [
     "percent",
     "shown",
     "size_words",
+    "spelt_as",
 ]
+
+
+def spelt_as(values: Iterable[object], known: Iterable[object]) -> list[str]:
+    """Each of ``values`` as text, written as one of ``known`` is when it is the same text in
+    other Unicode characters (its canonical composition, NFC, the same: "Plié" typed, its é
+    one character, and "Plié" from a file name some systems save as e and a combining
+    accent); any other value as it is. A truth read from the user's files is compared with a
+    case base's labels so: written otherwise, every one of its clips or blocks was counted
+    wrong, or as a label the case base lacks, without a word. A value of ``known`` itself,
+    or one two of ``known`` write alike, is kept."""
+    canonical: dict[str, str | None] = {}
+    for k in map(str, known):
+        key = unicodedata.normalize("NFC", k)
+        canonical[key] = k if canonical.get(key, k) == k else None  # two spellings: neither
+    have = set(map(str, known))
+    out = []
+    for value in map(str, values):
+        like = None if value in have else canonical.get(unicodedata.normalize("NFC", value))
+        out.append(like if like is not None else value)
+    return out
 
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:

@@ -39,6 +39,10 @@ REPEATABLE_ACTIONS = (
 )
 
 
+#: how argparse begins the error of a command line missing required arguments
+REQUIRED = "the following arguments are required: "
+
+
 class Parser(argparse.ArgumentParser):
     """argparse's parser (its subcommands' too) with a usage error in one line: the error
     and where the usage is, not the usage itself (a command's is many lines). The error
@@ -52,13 +56,16 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self._given: dict[argparse.Action, list[str]] = {}
         self._words: list[str] = []
+        self._namespace = argparse.Namespace()
 
     def parse_known_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> tuple[argparse.Namespace, list[str]]:
         self._given = {}
         self._words = [str(a) for a in (sys.argv[1:] if args is None else args)]
-        return super().parse_known_args(args, namespace)
+        # kept for :meth:`_required`: what the actions had gathered when argparse refused
+        self._namespace = argparse.Namespace() if namespace is None else namespace
+        return super().parse_known_args(args, self._namespace)
 
     def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
         """An option that takes one value given twice with two values (``--labels squat
@@ -80,8 +87,29 @@ class Parser(argparse.ArgumentParser):
         return super()._get_values(action, arg_strings)
 
     def error(self, message: str) -> NoReturn:
+        message = self._required(message)
         guess = self._guess(message) or self._dashed(message)
         self.exit(2, f"{self.prog}: error: {shown(message)}{guess}; see {self.prog} --help\n")
+
+    def _required(self, message: str) -> str:
+        """argparse's "the following arguments are required: ..." with every argument
+        missing named, in the order the usage lists them: an argument that argparse takes
+        as optional and the command checks for itself (an action marked ``needed``:
+        ``segment``'s RECORDING, which may come after ``--truth``) is missing too when
+        nothing was gathered into it. ``posecbr segment`` given nothing said only that
+        ``--db`` was missing, and given ``--db`` then that RECORDING was."""
+        if not message.startswith(REQUIRED):
+            return message
+        named = {n.strip() for n in message[len(REQUIRED) :].split(",")}
+        missing = [
+            name
+            for a in self._actions
+            if (name := argparse._get_action_name(a)) in named
+            or (getattr(a, "needed", False) and not getattr(self._namespace, a.dest, None))
+        ]
+        if not named <= set(missing):  # a name not of an action here: said as argparse said it
+            return message
+        return REQUIRED + ", ".join(str(n) for n in missing)
 
     def _dashed(self, message: str) -> str:
         """ " ('-x.npz' begins with '-': give it as ./-x.npz, or after --)" when an argument
@@ -187,6 +215,7 @@ SYSTEM_ERRNOS = frozenset(
         errno.EPERM,
         errno.EROFS,
         errno.EIO,
+        errno.ELOOP,  # symbolic links that lead round in a loop
     }
 )
 
@@ -359,7 +388,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, MemoryError) as exc:
         return system_error(command, exc)
     except Exception as exc:  # a bug: one line and the traceback in a file, not a raw one
-        return internal_error(command, exc)
+        loop = symlink_loop(exc)
+        return internal_error(command, exc) if loop is None else system_error(command, loop)
+
+
+def symlink_loop(exc: BaseException) -> OSError | None:
+    """The system's error (ELOOP, naming the path) that ``exc`` stands for when it is
+    Python's RuntimeError for symbolic links that lead round in a loop, met resolving a path
+    (``Path.resolve`` before Python 3.13: "Symlink loop from '/data/x.npz'"); else None. An
+    input or output given as such a link was said as a bug in posecbr."""
+    found = re.fullmatch(r"Symlink loop from (.+)", str(exc)) if type(exc) is RuntimeError else None
+    if found is None:
+        return None
+    try:
+        where = ast.literal_eval(found.group(1))
+    except (ValueError, SyntaxError):
+        where = found.group(1)
+    return OSError(errno.ELOOP, "symbolic links that lead round in a loop", str(where))
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError
+from features.fileio import path_exists
 from posecbr.arguments import path_arg
 
 # A command evaluating one clip in a new process (describe, reps): below this many frames the
@@ -84,7 +85,7 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
     from features.readers.asfamc import read_asf_amc
 
     check_fps(fps)
-    if not path.exists():
+    if not path_exists(path):
         raise DataError("no such file", path)
     if not path.is_file() and not path.is_dir():  # reading a pipe waits for a writer
         raise DataError("is a pipe, socket or device, not a recording", path)

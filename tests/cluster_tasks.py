@@ -38,6 +38,15 @@ def slow_square(x: int) -> int:
     return x * x
 
 
+def slow_add(x: int, y: int) -> int:
+    """``x + y``, a tenth of a second later: a unit with a shared argument (``y``), as every
+    command's are (scattered to the workers once)."""
+    import time
+
+    time.sleep(0.1)
+    return x + y
+
+
 def die(*args: Any) -> None:
     """The worker process running it dies at once, as one the kernel kills (out of memory)."""
     os._exit(1)

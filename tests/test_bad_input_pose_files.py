@@ -193,7 +193,7 @@ CASES: list[tuple[str, Callable[[Path], Path], str]] = [
     ("no positions", lambda d: pose_file(d / "n.npz", positions=None),
      "not a pose file: missing positions"),
     ("an empty file", lambda d: (d / "e.npz").write_bytes(b"") and d / "e.npz" or d / "e.npz",
-     "cannot read pose file: not an .npz archive"),
+     "cannot read pose file: the file is empty (0 bytes)"),
     ("a text file named .npz",
      lambda d: ((d / "t.npz").write_text("positions,fps\n1,2\n"), d / "t.npz")[-1],
      "cannot read pose file: not an .npz archive"),

@@ -12,6 +12,7 @@ import io
 import json
 import logging
 import os
+import shutil
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,6 +26,7 @@ from casebase_store import open_store
 from features.cluster import connect, gather, map_outcomes
 from features.poses import load_pose, load_pose_arrays
 from posecbr.cli import main
+from tests.badinput import refused
 from tests.cluster_tasks import bookkeeping, fail_on_even, square_or_die_once
 from tests.test_pose_extract import SQUAT, _cut
 
@@ -249,6 +251,24 @@ def test_extract_on_the_cluster_matches_one_process_and_resumes(
     out = capfd.readouterr()
     assert "0 extracted, 2 up to date, 1 failed" in out.err
     assert {p: p.stat().st_mtime_ns for p in (tmp_path / "dask" / "squat").iterdir()} == stamps
+
+
+def test_a_workers_or_nannys_address_is_named_for_what_it_is(
+    client: Any, address: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--scheduler`` given a worker's address (or its nanny's), as `dask worker` prints
+    them: said so, with the worker's scheduler. Dask said "cannot reach the Dask scheduler
+    at ... (Worker.identity() got an unexpected keyword argument 'n_workers')" under two
+    warnings of its own ("Closing dangling stream")."""
+    worker, info = next(iter(client.scheduler_info()["workers"].items()))
+    (tmp_path / "data" / "deep_squat").mkdir(parents=True)  # one clip: the command is quick
+    shutil.copy(DEMO / "m01_s01_e01.npz", tmp_path / "data" / "deep_squat")
+    argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite"), "--scheduler"]
+    said = f"--scheduler: {worker} is a Dask worker's address, not the scheduler's"
+    refused([*argv, worker], tmp_path, capsys, f"{said} (its scheduler: {address})")
+    nanny = info["nanny"]
+    said = f"--scheduler: {nanny} is a Dask nanny's address (the process that starts a worker)"
+    refused([*argv, nanny], tmp_path, capsys, f"{said}, not the scheduler's")
 
 
 @pytest.mark.parametrize(

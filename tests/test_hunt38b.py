@@ -139,15 +139,17 @@ def test_a_stream_ending_with_nobody_in_view_ends_with_a_nobody_segment(
 ) -> None:
     """``squats`` squats, then (``down``) down into one more and lost from view at the bottom
     0.5 s later, nobody in view for the last 1 or 1.5 s of the stream. By hand: ``squats``
-    repetitions, and one more for the squat lost at the bottom (README: the segment before
-    nobody in view keeps a far point where the person was lost, in ``watch`` as in
-    ``segment``); the last 1-1.5 s with nobody in view a segment of its own (at least 1 s),
-    counted 0. ``segment`` gives that; ``watch`` now too. Before, ``watch`` kept the stretch
-    in the segment (no hop's evidence, a second behind the stream, reached it) and the squat
-    lost at the bottom counted 0 (a far point cut off by the end of the stream)."""
+    repetitions, and, after whole ones, one more for the squat lost at the bottom, as deep as
+    they (README: the person lost for good is as the recording's end, where a far point cut
+    off counts beside whole ones, in ``watch`` as in ``segment`` and ``reps``; hunt 51b:
+    alone, the way down is no repetition, 0, where it counted 1); the last 1-1.5 s with
+    nobody in view a segment of its own (at least 1 s), counted 0. ``segment`` gives that;
+    ``watch`` now too. Before, ``watch`` kept the stretch in the segment (no hop's evidence,
+    a second behind the stream, reached it) and the squat lost at the bottom counted 0 (a
+    far point cut off by the end of the stream)."""
     seq = _lost_to_the_end(squats, down, blind_s, 0.0)
     lost = seq.n_frames - int(blind_s * FPS)
-    want = squats + down
+    want = squats + (down and squats > 0)
     offline = _offline(squat_or_arms, seq)
     assert offline[-1] == (lost, seq.n_frames, None, 0)
     assert sum(r for *_, r in offline) == want

@@ -25,7 +25,12 @@ import pytest
 from PIL import Image
 
 from features.errors import DataError
-from features.pose_estimation import PoseEstimator, served_file_rate, stream_poses
+from features.pose_estimation import (
+    PoseEstimator,
+    iter_frames,
+    served_file_rate,
+    stream_poses,
+)
 from features.pose_estimation.served import SERVED_START, Unread, served_cut, served_file
 from tests.badinput import refused, small_case_base
 from tests.test_hunt34c import _QuietServer
@@ -136,24 +141,23 @@ def test_a_served_mp4_whose_first_track_is_a_preview_is_refused(server: tuple[Pa
     )
 
 
-def test_a_served_photo_of_tiles_is_refused_not_posed_on_one_tile(
+def test_a_served_photo_of_tiles_is_read_whole_as_the_file_here(
     shared_data: Path, server: tuple[Path, str]
 ) -> None:
     """A 128x96 AVIF of 2 x 2 tiles: from a server answering range requests OpenCV read one
-    64x64 tile at 1 fps; now refused as the file here is. From Python's server (OpenCV does
-    not open it) the check for a cut file called it "unfinished MP4/MOV: ... no index": it
-    read 8 bytes of its start, too few for the brand that says it is a photo."""
+    64x64 tile at 1 fps; refused as the file here was (until hunt 51f), now read whole as
+    the file here is, the same picture exactly. From Python's server (OpenCV does not open
+    it) the check for a cut file called it "unfinished MP4/MOV: ... no index": it read 8
+    bytes of its start, too few for the brand that says it is a photo."""
     rgb = np.asarray(Image.open(shared_data / PHOTO).convert("RGB"))[100:196, 220:348]
     folder, address = server
     (folder / "ranged" / "IMG_0002.avif").write_bytes(_avif_grid(np.ascontiguousarray(rgb), 64))
     (folder / "IMG_0002.avif").write_bytes((folder / "ranged" / "IMG_0002.avif").read_bytes())
     url = f"{address}/ranged/IMG_0002.avif"
-    with pytest.raises(DataError) as refusal:
-        stream_poses(url, fps=served_file_rate(url, 10.0), timeout_s=10.0)
-    assert str(refusal.value).startswith(
-        f"{url}: an AVIF picture of 128x96 made of 4 tiles (as a phone stores a photo), of"
-        " which OpenCV decodes one alone (64x64): convert it to JPEG or PNG first"
-    )
+    frames = stream_poses(url, fps=served_file_rate(url, 10.0), timeout_s=10.0, max_frames=1)
+    (here,) = list(iter_frames(folder / "IMG_0002.avif"))
+    assert here.shape == (96, 128, 3)
+    np.testing.assert_array_equal(next(iter(frames)).rgb, here)
     assert served_cut(f"{address}/IMG_0002.avif", 10.0) is None
 
 

@@ -48,17 +48,22 @@ def _colour(i: int) -> tuple[int, int, int]:
     return 0, 20 + 12 * (i % 18), 20 + 12 * (i // 18)
 
 
+def _times(stall_s: float = 0.0, after_s: float = 0.5) -> list[float]:
+    """When the camera's frames come: 15 a second for the first second, then 30, none for
+    ``stall_s`` after the one at ``after_s`` (those after it that much later)."""
+    times = [i / 15.0 if i < SLOW else 1.0 + (i - SLOW) / 30.0 for i in range(N)]
+    return [t + (stall_s if t > after_s + 1e-6 else 0.0) for t in times]
+
+
 def _slow_watch(
-    db: Path, world: np.ndarray, out: Path | None, stall_s: float = 0.0
+    db: Path, world: np.ndarray, out: Path | None, times: list[float]
 ) -> dict[str, Any]:
     """``watch 0 --out OUT`` of a camera that sends 15 frames a second for its first second,
     then 30 (``world``: CMU 13_30's jumping jacks at 30 fps, each frame the pose at the time
     it was taken), each frame's image one colour (:func:`_colour`): the exit status, stderr,
     and how many of the images the stream gave were still alive (not freed) each time the
-    watch began again. ``stall_s``: no frame for so long after the one at 0.5 s (the frames
-    after it that much later, their poses the same). ``out`` None: no ``--out``."""
-    times = [i / 15.0 if i < SLOW else 1.0 + (i - SLOW) / 30.0 for i in range(N)]
-    times = [t + (stall_s if t > 0.5 else 0.0) for t in times]
+    watch began again. ``times``: when each frame comes (:func:`_times`; the poses the
+    same). ``out`` None: no ``--out``."""
     given: list[weakref.ref[np.ndarray]] = []
 
     def stream(source: Any, **kwargs: Any) -> Iterator[StreamFrame]:
@@ -89,6 +94,20 @@ def _slow_watch(
     return {"status": status, "out": out, "err": err.getvalue(), "alive": alive}
 
 
+def _colours_seen(video: Path) -> list[np.ndarray]:
+    """Each frame's colour (BGR) in ``video``, the median of a patch at its bottom right,
+    where nothing is drawn."""
+    cap = cv2.VideoCapture(str(video))
+    seen = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        seen.append(np.median(bgr[HEIGHT - 30 : HEIGHT - 10, WIDTH - 30 : WIDTH - 10], axis=(0, 1)))
+    cap.release()
+    return seen
+
+
 @pytest.fixture(scope="module")
 def jumping_jacks(shared_data: Path) -> np.ndarray:
     """CMU 13_30 (120 fps) at 30 fps: world positions ``(frames, joints, 3)``."""
@@ -106,7 +125,8 @@ def slow_start(
     tmp_path_factory: pytest.TempPathFactory,
 ) -> dict[str, Any]:
     """:func:`_slow_watch` into a folder of its own."""
-    return _slow_watch(case_base, jumping_jacks, tmp_path_factory.mktemp("hunt51d") / "watched.mp4")
+    out = tmp_path_factory.mktemp("hunt51d") / "watched.mp4"
+    return _slow_watch(case_base, jumping_jacks, out, _times())
 
 
 def test_a_slow_start_drawn_again_holds_not_its_images_in_memory(
@@ -116,23 +136,18 @@ def test_a_slow_start_drawn_again_holds_not_its_images_in_memory(
     then only the frames in flight were alive (the reader's queue of 8, the one it reads,
     the one in hand, the one before it: 8-13 seen, under load), the first frames' images
     freed. Before, every frame read since the first was, and those queued (52-53). The
-    video is the 30-fps grid from the first frame: grid time k (k / 30 s) shows, for k <
-    30, the 15-fps frame on screen then (k // 2), and after frame 15 + (k - 30), each
-    image's colour kept through the read back; nothing is left beside the video."""
+    video is the 30-fps grid from the first frame: grid time k (k / 30 s) shows the frame
+    on screen then, the last that came by k / 30 s (for k < 30 the 15-fps frame k // 2,
+    then frame 15 + (k - 30)), each image's colour kept through the read back; nothing is
+    left beside the video."""
     assert slow_start["status"] == 0
-    assert slow_start["err"].count("the frame rate rose from 15 to 30 fps") == 1
+    assert slow_start["err"].count("the frame rate rose from 15 to 30 fps at 1.9 s") == 1
     [alive] = slow_start["alive"]
     assert alive <= 20
-    cap = cv2.VideoCapture(str(slow_start["out"]))
-    seen = []
-    while True:
-        ok, bgr = cap.read()
-        if not ok:
-            break
-        seen.append(np.median(bgr[HEIGHT - 30 : HEIGHT - 10, WIDTH - 30 : WIDTH - 10], axis=(0, 1)))
-    cap.release()
-    assert len(seen) == 30 + (N - SLOW)
-    expected = [k // 2 if k < 30 else SLOW + k - 30 for k in range(len(seen))]
+    seen = _colours_seen(slow_start["out"])
+    times = _times()
+    assert len(seen) == round(times[-1] * 30) + 1
+    expected = [max(i for i, t in enumerate(times) if t <= k / 30 + 1e-6) for k in range(len(seen))]
     for k, (bgr_median, frame) in enumerate(zip(seen, expected, strict=True)):
         red, green, blue = _colour(frame)
         np.testing.assert_allclose(bgr_median, [blue, green, red], atol=5, err_msg=f"grid {k}")
@@ -164,7 +179,7 @@ def test_a_slow_start_whose_frames_cannot_be_kept_is_followed_at_its_first_rate(
     rise taken, the video drawn again at 30 fps."""
     out = tmp_path / "watched.mp4"
     file_size_limit(1_000_000)
-    watched = _slow_watch(case_base, jumping_jacks, out)
+    watched = _slow_watch(case_base, jumping_jacks, out, _times())
     assert watched["status"] == 0
     notes = [line for line in watched["err"].splitlines() if "cannot be kept" in line]
     assert notes == [
@@ -179,6 +194,29 @@ def test_a_slow_start_whose_frames_cannot_be_kept_is_followed_at_its_first_rate(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["watched.mp4"]
 
 
+def test_a_stall_right_after_the_rise_shows_the_kept_frame_before_it(
+    case_base: Path,  # noqa: F811
+    jumping_jacks: np.ndarray,
+    tmp_path: Path,
+) -> None:
+    """No frame for 0.6 s after the one at 1.93 s, the rise taken just before: the stall's
+    grid times show the frame before it, one of the kept frames, whose image is read back
+    after the others were drawn again (the kept images stay until no grid time can show
+    one). Each grid time k shows the last frame that came by k / 30 s."""
+    out = tmp_path / "watched.mp4"
+    times = _times(0.6, after_s=1.95)
+    watched = _slow_watch(case_base, jumping_jacks, out, times)
+    assert watched["status"] == 0, watched["err"]
+    assert watched["err"].count("the frame rate rose from 15 to 30 fps") == 1
+    assert watched["err"].count("the stream stalled: 0.6 s without frames") == 1
+    seen = _colours_seen(out)
+    assert len(seen) == round(times[-1] * 30) + 1
+    for k, bgr_median in enumerate(seen):
+        frame = max(i for i, t in enumerate(times) if t <= k / 30 + 1e-6)
+        red, green, blue = _colour(frame)
+        np.testing.assert_allclose(bgr_median, [blue, green, red], atol=5, err_msg=f"grid {k}")
+
+
 def test_a_stall_before_the_rise_is_said_once(
     case_base: Path,  # noqa: F811
     jumping_jacks: np.ndarray,
@@ -186,7 +224,7 @@ def test_a_stall_before_the_rise_is_said_once(
     """No frame for 0.6 s after the one at 0.5 s, then the stream as before: the stall is
     said once, when it came, and the rise taken. Before, it was said again when the kept
     frames were taken again at 30 fps ("... at 0.5-1.1 s", then "... at 0.4-1.1 s")."""
-    watched = _slow_watch(case_base, jumping_jacks, None, stall_s=0.6)
+    watched = _slow_watch(case_base, jumping_jacks, None, _times(0.6))
     assert watched["status"] == 0
     assert watched["err"].count("the frame rate rose from") == 1
     stalls = [line for line in watched["err"].splitlines() if "the stream stalled" in line]

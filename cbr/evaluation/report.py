@@ -23,7 +23,7 @@ import numpy as np
 
 from features.datasets import truth_value
 from features.errors import DataError
-from features.fileio import binary_kind, check_output, file_head, write_text_atomic
+from features.fileio import binary_kind, check_output, file_head, path_exists, write_text_atomic
 from features.poses import check_not_poses
 from features.text import size_words
 
@@ -86,7 +86,7 @@ def load_results(path: str | Path) -> tuple[CompareResults, Path]:
         p = p / "results.json"
     if p.is_dir():  # a folder named results.json in the folder given
         raise DataError("is a folder, not a results file", p)
-    if p.exists() and not p.is_file():  # reading a pipe waits for a writer that may not come
+    if path_exists(p) and not p.is_file():  # reading a pipe waits for a writer that may not come
         raise DataError("is a pipe, socket or device, not a results file", p)
     if not p.is_file():
         raise DataError("no such results file (run `posecbr compare DATA --out DIR` first)", p)

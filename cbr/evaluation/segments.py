@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from features.label_tracks import code_order
+from features.text import spelt_as
 
 
 def truth_blocks(per_frame: np.ndarray, fps: float, block_s: float) -> np.ndarray:
@@ -117,10 +118,16 @@ def score_segmentation(
 ) -> SegmentationScores:
     """The figures of ``result`` (:class:`cbr.segmentation.Segmentation`) against the true
     label of every ``block_s`` block ``truth`` (:func:`truth_blocks`), ``known`` the case
-    base's activities. The blocks both cover are scored."""
+    base's activities. The blocks both cover are scored; a true label that is an activity
+    written in other Unicode characters (:func:`features.text.spelt_as`) is that activity."""
     pred = np.array(result.blocks[: len(truth)], dtype=object)
     truth = np.asarray(truth, dtype=object)[: len(pred)]
     known = {str(k) for k in known}
+    labels = list(dict.fromkeys(truth.tolist()))
+    spelt = {t: s for t, s in zip(labels, spelt_as(labels, known), strict=True) if s != str(t)}
+    if spelt:
+        truth = truth.copy()
+        truth[:] = [spelt.get(t, t) for t in truth.tolist()]
     seen = np.array([str(t) in known for t in truth], dtype=bool)
     unknown = np.array([p is None for p in pred], dtype=bool)
     fps = result.fps

@@ -9,6 +9,7 @@ FLV, MPEG-TS), and how a still picture is turned to be seen (its EXIF orientatio
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,21 +30,23 @@ PICTURE_FORMATS = ("JPEG", "PNG", "TIFF", "WEBP")
 file opens as a JPEG)."""
 
 
-def picture_orientation(path: Path) -> int:
+def picture_orientation(source: Path | Any, head: bytes | None = None) -> int:
     """The EXIF orientation (1-8) of a still picture: a phone stores a portrait photo as its
     sensor took it, sideways, and says in this tag how a viewer turns it upright. FFmpeg,
-    and so OpenCV's capture, decodes the picture as stored. 1 for a file that is no picture
-    of :data:`PICTURE_FORMATS` (a video), that has no such tag, or whose tag is no
+    and so OpenCV's capture, decodes the picture as stored. ``source``: the picture's path,
+    or a file read from its start (``seek``, ``read``, ``tell``: a served file,
+    :class:`.served.ServedFile`) whose first bytes are ``head``. 1 for a file that is no
+    picture of :data:`PICTURE_FORMATS` (a video), that has no such tag, or whose tag is no
     orientation. A file that starts as a video does (MP4, AVI, Matroska) is none of them,
     said without importing Pillow, which loads every format it reads to open one."""
-    if is_video(file_head(path, 16)):
+    if is_video(file_head(source, 16) if head is None else head[:16]):
         return 1
     from PIL import Image
 
     Image.init()  # every format Pillow reads here registered (WebP only when built with it)
     formats = [name for name in PICTURE_FORMATS if name in Image.OPEN]
     try:
-        with Image.open(path, formats=formats) as picture:
+        with Image.open(source, formats=formats) as picture:
             value = picture.getexif().get(EXIF_ORIENTATION, 1)
     except (Image.DecompressionBombError, OSError, SyntaxError, ValueError):
         return 1  # no picture Pillow reads (a video, a damaged picture): OpenCV's verdict stands
@@ -96,6 +99,237 @@ def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
         width, height = height, width
     tiles = len(_heif_derived_from(meta, boxes.get(b"iref"), primary)) or 1
     return HeifPicture(brand, width, height, tiles)
+
+
+@dataclass(frozen=True)
+class HeifGrid:
+    """A HEIF photo's primary picture made of tiles (a grid, as a phone stores a photo), to
+    be decoded tile by tile and put together: ``stream``, its tiles coded one after another
+    as one stream FFmpeg reads (``codec`` "hevc": an Annex B stream, each tile its parameter
+    sets and its picture; "av1": an IVF file, each tile a frame), ``rows`` x ``columns``
+    tiles of ``tile_width`` x ``tile_height`` px in rows from the top left, the picture the
+    top-left ``width`` x ``height`` px of them, then turned as its ``turns`` say, in order:
+    ("irot", n), n quarter turns counter-clockwise; ("imir", axis), 0 upside down, 1 left to
+    right (ISO/IEC 23008-12)."""
+
+    codec: str
+    stream: bytes
+    rows: int
+    columns: int
+    tile_width: int
+    tile_height: int
+    width: int
+    height: int
+    turns: tuple[tuple[str, int], ...]
+
+
+HEIF_TILE_CODECS = {b"hvc1": "hevc", b"hev1": "hevc", b"av01": "av1"}
+"""The tiles' codecs (a HEIF item's type) :func:`heif_grid` puts in a stream: HEVC (a HEIC,
+an iPhone's photo) and AV1 (an AVIF)."""
+HEIF_TILES_LIMIT = 256 << 20
+"""The most bytes :func:`heif_grid` reads of a grid's tiles (a phone's 48-megapixel photo
+takes some 10 MB)."""
+
+
+def heif_grid(fh: Any, size: int, head: bytes) -> HeifGrid | None:
+    """The primary picture of a HEIF file (:func:`heif_picture`: ``size`` bytes, its first
+    bytes ``head``, read from ``fh``) when it is a grid of tiles (its item type ``grid``)
+    coded in HEVC or AV1 (:data:`HEIF_TILE_CODECS`), each tile's bytes read from the file
+    (its iloc extents, or its idat box), all in one read. None for any other picture: coded
+    whole, tiles of another codec, of sizes that differ, fewer than the grid's rows and
+    columns, a layout or index that cannot be read."""
+    if heif_brand(head) is None:
+        return None
+    meta = _top_box(fh, size, b"meta", HEIF_META_LIMIT)
+    if meta is None:
+        return None
+    boxes = {kind: (body, stop) for kind, body, stop in _mp4_boxes(meta, 4, len(meta))}
+    if not {b"pitm", b"iprp", b"iinf", b"iloc", b"iref"} <= boxes.keys():
+        return None
+    body, _ = boxes[b"pitm"]
+    primary = int.from_bytes(meta[body + 4 : body + (8 if meta[body] >= 1 else 6)], "big")
+    tiles = _heif_derived_from(meta, boxes[b"iref"], primary)
+    coded = _heif_tiles(meta, boxes, primary, tiles)
+    places = _heif_locations(meta, *boxes[b"iloc"])
+    if coded is None or any(item not in places for item in [primary, *tiles]):
+        return None
+    codec, configs, tile_width, tile_height = coded
+    idat = meta[slice(*boxes[b"idat"])] if b"idat" in boxes else b""
+    data = _heif_items(fh, size, idat, [places[item] for item in [primary, *tiles]])
+    layout = None if data is None else _grid_layout(data[0])
+    if data is None or layout is None or layout[0] * layout[1] != len(tiles):
+        return None
+    rows, columns, width, height = layout
+    if not (0 < width <= columns * tile_width and 0 < height <= rows * tile_height):
+        return None
+    stream = (
+        _av1_stream(configs, data[1:], tile_width, tile_height)
+        if codec == "av1"
+        else _hevc_stream(configs, data[1:])
+    )
+    if stream is None:
+        return None
+    shown = _heif_properties(meta, *boxes[b"iprp"], primary)
+    turns = tuple(
+        (name.decode(), shown[name][0] & (3 if name == b"irot" else 1))
+        for name in shown
+        if name in (b"irot", b"imir") and shown[name]
+    )
+    return HeifGrid(codec, stream, rows, columns, tile_width, tile_height, width, height, turns)
+
+
+def _heif_tiles(
+    meta: bytes, boxes: dict[bytes, tuple[int, int]], primary: int, tiles: list[int]
+) -> tuple[str, list[bytes], int, int] | None:
+    """The codec (:data:`HEIF_TILE_CODECS`), configurations (each tile's hvcC or av1C
+    property's body) and width and height (px) of the ``tiles`` a HEIF meta's item
+    ``primary``, a grid, is made of (its ``boxes``: name, where its body starts and ends);
+    None when it is no grid, or its tiles are of another codec, or of sizes that differ."""
+    types = _heif_item_types(meta, *boxes[b"iinf"])
+    kinds = {types.get(tile) for tile in tiles}
+    if types.get(primary) != b"grid" or len(kinds) != 1 or kinds - HEIF_TILE_CODECS.keys():
+        return None
+    codec = HEIF_TILE_CODECS[kinds.pop() or b""]
+    props = [_heif_properties(meta, *boxes[b"iprp"], tile) for tile in tiles]
+    sizes = {p.get(b"ispe", b"")[4:12] for p in props}
+    config = b"av1C" if codec == "av1" else b"hvcC"
+    if len(sizes) != 1 or any(config not in p for p in props):
+        return None
+    width, height = struct.unpack(">II", sizes.pop().rjust(8, b"\0"))
+    if not width * height:
+        return None
+    return codec, [p[config] for p in props], width, height
+
+
+def _heif_item_types(meta: bytes, start: int, end: int) -> dict[int, bytes]:
+    """Each item's type (``hvc1``, ``av01``, ``grid``, ``Exif``) by its ID, from a HEIF
+    meta's iinf box (``meta[start:end]``)."""
+    count_bytes = 2 if meta[start] == 0 else 4
+    types: dict[int, bytes] = {}
+    for kind, body, stop in _mp4_boxes(meta, start + 4 + count_bytes, end):
+        version = meta[body]
+        if kind != b"infe" or version < 2:
+            continue
+        id_bytes = 2 if version == 2 else 4
+        at = body + 4 + id_bytes + 2  # its ID, protection index
+        if at + 4 <= stop:
+            types[int.from_bytes(meta[body + 4 : body + 4 + id_bytes], "big")] = meta[at : at + 4]
+    return types
+
+
+def _heif_locations(
+    meta: bytes, start: int, end: int
+) -> dict[int, tuple[int, list[tuple[int, int]]]]:
+    """Where each item's bytes are, by its ID, from a HEIF meta's iloc box
+    (``meta[start:end]``): its construction method (0: in the file, 1: in the idat box) and
+    its extents (offset, length), its base offset added. An item whose bytes are elsewhere
+    (another method, a length 0: "to the end") is left out."""
+    version = meta[start]
+    sizes = meta[start + 4], meta[start + 5]
+    offset_n, length_n, base_n = sizes[0] >> 4, sizes[0] & 15, sizes[1] >> 4
+    index_n = sizes[1] & 15 if version in (1, 2) else 0
+    id_n = 2 if version < 2 else 4
+    at, found = start + 6 + id_n, {}
+
+    def number(n: int) -> int:
+        nonlocal at
+        value = int.from_bytes(meta[at : at + n], "big")
+        at += n
+        return value
+
+    count = int.from_bytes(meta[start + 6 : start + 6 + id_n], "big")
+    for _ in range(count):
+        if at > end:
+            break
+        item = number(id_n)
+        method = number(2) & 15 if version in (1, 2) else 0
+        number(2)  # data reference index: 0, this file
+        base = number(base_n)
+        extents = []
+        for _ in range(number(2)):
+            number(index_n)
+            offset, length = number(offset_n), number(length_n)
+            extents.append((base + offset, length))
+        if at <= end and method in (0, 1) and extents and all(n for _, n in extents):
+            found[item] = (method, extents)
+    return found
+
+
+def _heif_items(
+    fh: Any, size: int, idat: bytes, places: list[tuple[int, list[tuple[int, int]]]]
+) -> list[bytes] | None:
+    """The bytes of items at ``places`` (:func:`_heif_locations`), those in the file read
+    from ``fh`` (of ``size`` bytes) in one read from the first to the last; None when one
+    lies past the file's end or the idat box, or they span more than
+    :data:`HEIF_TILES_LIMIT`."""
+    spans = [(at, at + n) for method, extents in places if method == 0 for at, n in extents]
+    first = min((a for a, _ in spans), default=0)
+    last = max((b for _, b in spans), default=0)
+    if last > size or last - first > HEIF_TILES_LIMIT:
+        return None
+    fh.seek(first)
+    read = bytes(fh.read(last - first)) if spans else b""
+    if len(read) < last - first:
+        return None
+    items = []
+    for method, extents in places:
+        source, shift = (read, first) if method == 0 else (idat, 0)
+        if any(at - shift + n > len(source) or at < shift for at, n in extents):
+            return None
+        items.append(b"".join(source[at - shift : at - shift + n] for at, n in extents))
+    return items
+
+
+def _grid_layout(data: bytes) -> tuple[int, int, int, int] | None:
+    """A grid item's rows, columns, and picture width and height (px), from its bytes
+    (version, flags: 1 for 32-bit sizes, rows less one, columns less one, width, height)."""
+    if len(data) < 8 or data[0] != 0:
+        return None
+    n = 4 if data[1] & 1 else 2
+    if len(data) < 4 + 2 * n:
+        return None
+    width, height = int.from_bytes(data[4 : 4 + n], "big"), int.from_bytes(data[4 + n :], "big")
+    return data[2] + 1, data[3] + 1, width, height
+
+
+def _hevc_stream(configs: list[bytes], tiles: list[bytes]) -> bytes | None:
+    """HEVC tiles (each its hvcC property's body and its coded bytes, NAL units each after
+    its length) as one Annex B stream: each tile's parameter sets (from its hvcC) and NAL
+    units after start codes. None for a configuration that cannot be read."""
+    out: list[bytes] = []
+    for config, data in zip(configs, tiles, strict=True):
+        if len(config) < 23:
+            return None
+        size, at, units = (config[21] & 3) + 1, 23, []
+        for _ in range(config[22]):
+            count, at = int.from_bytes(config[at + 1 : at + 3], "big"), at + 3
+            for _ in range(count):
+                n = int.from_bytes(config[at : at + 2], "big")
+                units.append(config[at + 2 : at + 2 + n])
+                at += 2 + n
+        if at > len(config):
+            return None
+        at = 0
+        while at + size <= len(data):
+            n = int.from_bytes(data[at : at + size], "big")
+            units.append(data[at + size : at + size + n])
+            at += size + n
+        out.extend(b"\0\0\0\1" + unit for unit in units)
+    return b"".join(out)
+
+
+def _av1_stream(configs: list[bytes], tiles: list[bytes], width: int, height: int) -> bytes | None:
+    """AV1 tiles (each its av1C property's body and its coded bytes) as one IVF file, each
+    tile a frame: a temporal delimiter, the sequence header its av1C holds, its bytes."""
+    if any(len(config) < 4 for config in configs):
+        return None
+    header = struct.pack(
+        "<4sHH4sHHIIII", b"DKIF", 0, 32, b"AV01", width, height, 1, 1, len(tiles), 0
+    )
+    frames = [b"\x12\x00" + config[4:] + data for config, data in zip(configs, tiles, strict=True)]
+    return header + b"".join(
+        struct.pack("<IQ", len(frame), k) + frame for k, frame in enumerate(frames)
+    )
 
 
 def _top_box(

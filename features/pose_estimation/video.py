@@ -34,6 +34,7 @@ import itertools
 import math
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -49,16 +50,18 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from features.errors import DataError, InputError  # noqa: E402
-from features.fileio import as_path, heif_brand  # noqa: E402
+from features.fileio import as_path, heif_brand, path_exists  # noqa: E402
 from features.poses import EXTRACTION_VERSION, MIN_FPS, PoseSequence  # noqa: E402
 from features.progress import progress  # noqa: E402
 from features.skeleton import BLAZEPOSE_33  # noqa: E402
 from features.text import shown  # noqa: E402
 
 from .containers import (  # noqa: E402
+    HeifGrid,
     HeifPicture,
     VideoTrack,
     counted_by_duration,
+    heif_grid,
     heif_picture,
     is_mp4,
     mp4_empty_video,
@@ -171,6 +174,49 @@ class VideoInfo:
     orientation: int = 1
 
 
+class StillCapture:
+    """A picture decoded whole (a HEIF photo's tiles put together: :func:`_whole_picture`)
+    read as the one frame of a capture, as OpenCV's capture of a picture gives its frame:
+    ``bgr`` (as OpenCV decodes, turned to be seen), at the rate and codec (``fps``,
+    ``fourcc``) OpenCV states for the file."""
+
+    def __init__(self, bgr: np.ndarray, fps: float, fourcc: float) -> None:
+        self.bgr, self.fps, self.fourcc = bgr, fps, fourcc
+        self.grabbed, self.taken, self.released = False, 0, False
+
+    def isOpened(self) -> bool:  # noqa: N802 (OpenCV's name)
+        return not self.released
+
+    def release(self) -> None:
+        self.released = True
+
+    def grab(self) -> bool:
+        self.grabbed = not self.released and self.taken == 0
+        self.taken += 1
+        return self.grabbed
+
+    def retrieve(self) -> tuple[bool, Any]:
+        return (True, self.bgr.copy()) if self.grabbed else (False, None)
+
+    def read(self) -> tuple[bool, Any]:
+        return self.retrieve() if self.grab() else (False, None)
+
+    def get(self, prop: int) -> float:
+        return {
+            cv2.CAP_PROP_FRAME_COUNT: 1.0,
+            cv2.CAP_PROP_FPS: self.fps,
+            cv2.CAP_PROP_FOURCC: self.fourcc,
+            cv2.CAP_PROP_FRAME_WIDTH: float(self.bgr.shape[1]),
+            cv2.CAP_PROP_FRAME_HEIGHT: float(self.bgr.shape[0]),
+            cv2.CAP_PROP_POS_MSEC: 0.0,
+        }.get(prop, 0.0)
+
+
+Capture = cv2.VideoCapture | StillCapture
+"""What a file's frames are read from: OpenCV's capture, or a picture decoded whole
+(:class:`StillCapture`)."""
+
+
 def upright(image: np.ndarray, orientation: int) -> np.ndarray:
     """A still picture decoded as stored, flipped and turned as its EXIF ``orientation``
     (1-8, :func:`.containers.picture_orientation`) says a viewer shows it: 6, a phone's
@@ -229,13 +275,11 @@ def _capture(name: str, threads: int | None) -> cv2.VideoCapture:
     return cv2.VideoCapture(name)
 
 
-def open_video(
-    path: str | Path, decode_threads: int | None = None
-) -> tuple[cv2.VideoCapture, VideoInfo]:
+def open_video(path: str | Path, decode_threads: int | None = None) -> tuple[Capture, VideoInfo]:
     """Open a video file, or raise :class:`DataError` with a one-line reason.
     ``decode_threads``: FFmpeg's decoding threads (None: FFmpeg's default, one per core)."""
     path = as_path(path, "path")
-    if not path.exists():
+    if not path_exists(path):
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a video", path)
@@ -261,32 +305,33 @@ def open_video(
     refuse_text(cap, path)
     frames = int(max(0.0, cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0))
     fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-    width, height, orientation = _seen_size(cap, path, head)
+    seen, width, height, orientation = _seen_size(cap, path, head)
     fps, frames = _frames_rate(path, fps, frames, counted_by_duration(head))
     if not math.isfinite(fps) or fps < MIN_FPS or fps > MAX_VIDEO_FPS:
         # below MIN_FPS no pose file can hold it: refused before the model runs on every frame
-        cap.release()
+        seen.release()
         raise _not_a_video(path, head, fps)
     timeless = _timeless_frames(path) if is_mp4(head) else None
     if timeless is not None:
-        cap.release()
+        seen.release()
         raise DataError(
             f"video declares no usable frame rate (its header gives its {timeless} frames"
             " no duration)",
             path,
         )
-    return cap, VideoInfo(path, frames, fps, width, height, orientation)
+    return seen, VideoInfo(path, frames, fps, width, height, orientation)
 
 
-def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[int, int, int]:
-    """The width and height of the frames of ``cap`` (of ``path``, whose first bytes are
-    ``head``) as seen, and how posecbr turns them (:func:`upright`): a still picture by its
-    EXIF orientation (:func:`.containers.picture_orientation`), an MP4/MOV video by its
-    display matrix, less its mirror, where it mirrors the frames (:data:`UNMIRRORED`),
+def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[Capture, int, int, int]:
+    """The capture of ``path`` (whose first bytes are ``head``) to read its frames from, their
+    width and height as seen, and how posecbr turns them (:func:`upright`): a still picture
+    by its EXIF orientation (:func:`.containers.picture_orientation`), an MP4/MOV video by
+    its display matrix, less its mirror, where it mirrors the frames (:data:`UNMIRRORED`),
     OpenCV's own turning set off; one turned a quarter is as wide as it is stored high. An
     MP4/MOV whose first video track is a lesser one is refused
-    (:func:`_refuse_lesser_track`), and so is a HEIF photo of which OpenCV decodes a part
-    (:func:`_refuse_part`)."""
+    (:func:`_refuse_lesser_track`). A HEIF photo of which OpenCV decodes a part, one tile of
+    a phone's photo, is read whole (its tiles put together and turned: :func:`_whole_part`,
+    turned 1 then), or refused where it cannot be."""
     orientation = picture_orientation(path)
     if is_mp4(head) and heif_brand(head) is None:
         orientation = _tracks_turn(cap, path, _video_tracks(cap, path), orientation)
@@ -295,8 +340,10 @@ def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[int, int
     if orientation >= 5:
         width, height = height, width
     if heif_brand(head) is not None:
-        _refuse_part(cap, path, head, width, height)
-    return width, height, orientation
+        whole = _whole_part(cap, path, head, width, height)
+        if isinstance(whole, StillCapture):
+            return whole, whole.bgr.shape[1], whole.bgr.shape[0], 1
+    return cap, width, height, orientation
 
 
 def _tracks_turn(
@@ -336,42 +383,106 @@ def _video_tracks(cap: cv2.VideoCapture, path: Path) -> list[VideoTrack]:
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
 
 
-def _refuse_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> None:
-    """Refuse a HEIF photo (HEIC, AVIF: :func:`.containers.heif_picture`) of which OpenCV
-    decodes a ``width`` x ``height`` frame that is not its primary picture: FFmpeg gives each
-    coded picture in the file as a stream of its own and OpenCV reads the first, so of a
-    phone's photo, 512x512 tiles put together, it read the top-left tile alone (the pose
-    model ran on it, nobody or a part of the body found, exit 0)."""
+def _whole_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> Capture:
+    """``cap`` of a HEIF photo (HEIC, AVIF: :func:`.containers.heif_picture`) of which
+    OpenCV decodes a ``width`` x ``height`` frame that is its primary picture; else, where
+    that picture is a grid of tiles (a phone's photo, 512x512 tiles put together: FFmpeg
+    gives each coded picture in the file as a stream of its own and OpenCV reads the first,
+    the top-left tile alone), the picture put together from its tiles
+    (:func:`_whole_picture`, ``cap`` released); any other such photo is refused."""
     try:
         with open(path, "rb") as fh:
-            picture = heif_picture(fh, path.stat().st_size, head)
+            size = path.stat().st_size
+            picture = heif_picture(fh, size, head)
+            if picture is None or (picture.width, picture.height) == (width, height):
+                return cap
+            grid = heif_grid(fh, size, head)
     except OSError as exc:
         cap.release()
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
-    _refuse_picture_part(cap, path, picture, width, height)
+    return _whole_picture(cap, path, picture, grid, (width, height))
 
 
-def _refuse_picture_part(
+def _whole_picture(
     cap: cv2.VideoCapture,
     source: str | Path,
-    picture: HeifPicture | None,
-    width: int,
-    height: int,
-) -> None:
-    """Refuse the HEIF photo ``picture`` (opened from ``source``) when OpenCV decodes a
-    ``width`` x ``height`` frame of it that is not it (:func:`_refuse_part`)."""
-    if picture is None or (picture.width, picture.height) == (width, height):
-        return
+    picture: HeifPicture,
+    grid: HeifGrid | None,
+    decoded: tuple[int, int],
+) -> StillCapture:
+    """The HEIF photo ``picture`` (opened from ``source``), of which OpenCV decodes a frame of
+    ``decoded`` (width, height) that is not it, put together from the tiles of its ``grid``
+    (:func:`.containers.heif_grid`: each decoded by FFmpeg, in one stream), as one frame
+    (:class:`StillCapture`, at the rate OpenCV states for it); ``cap`` released. Refused when
+    it is no grid of tiles FFmpeg decodes, as it was before: a part of it was posed."""
+    fps, fourcc = cap.get(cv2.CAP_PROP_FPS), cap.get(cv2.CAP_PROP_FOURCC)
     cap.release()
     whole = f"{_a(picture.brand)} picture of {picture.width}x{picture.height}"
-    if picture.tiles > 1:
-        what = (
-            f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
-            f" OpenCV decodes one alone ({width}x{height})"
+    if grid is None:
+        if picture.tiles > 1:
+            what = (
+                f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
+                f" OpenCV decodes one alone ({decoded[0]}x{decoded[1]})"
+            )
+        else:
+            what = (
+                f"{whole} of which OpenCV decodes another picture in the file"
+                f" ({decoded[0]}x{decoded[1]})"
+            )
+        raise DataError(f"{what}: convert it to JPEG or PNG first", source)
+    tiles = _decoded_tiles(grid, source)
+    rows, columns, high, wide = grid.rows, grid.columns, grid.tile_height, grid.tile_width
+    if len(tiles) < rows * columns:
+        raise DataError(
+            f"{whole} made of {rows * columns} tiles (as a phone stores a photo), of which"
+            f" FFmpeg decodes {len(tiles)}: convert it to JPEG or PNG first",
+            source,
         )
-    else:
-        what = f"{whole} of which OpenCV decodes another picture in the file ({width}x{height})"
-    raise DataError(f"{what}: convert it to JPEG or PNG first", source)
+    bgr = (
+        np.stack(tiles)
+        .reshape(rows, columns, high, wide, 3)
+        .swapaxes(1, 2)
+        .reshape(rows * high, columns * wide, 3)[: grid.height, : grid.width]
+    )
+    for name, n in grid.turns:
+        if name == "irot":
+            bgr = np.rot90(bgr, n)
+        else:
+            bgr = bgr[::-1] if n == 0 else bgr[:, ::-1]
+    if bgr.shape[:2] != (picture.height, picture.width):
+        raise DataError(
+            f"{whole} whose tiles make a picture of {bgr.shape[1]}x{bgr.shape[0]}: convert it"
+            " to JPEG or PNG first",
+            source,
+        )
+    return StillCapture(np.ascontiguousarray(bgr), float(fps or 1.0), float(fourcc or 0.0))
+
+
+def _decoded_tiles(grid: HeifGrid, source: str | Path) -> list[np.ndarray]:
+    """The tiles of ``grid`` (:func:`.containers.heif_grid`) FFmpeg decodes from its stream
+    (written to a file of its own in the temporary folder, deleted after: OpenCV reads a
+    file), in order, up to the first it does not decode or of another size than the grid's."""
+    suffix = ".hevc" if grid.codec == "hevc" else ".ivf"
+    tiles: list[np.ndarray] = []
+    try:
+        with tempfile.TemporaryDirectory(prefix="posecbr-tiles-") as folder:
+            stream = Path(folder) / f"tiles{suffix}"
+            stream.write_bytes(grid.stream)
+            with _quiet_opencv():
+                cap = cv2.VideoCapture(str(stream), cv2.CAP_FFMPEG)
+            try:
+                while cap.isOpened() and len(tiles) < grid.rows * grid.columns:
+                    ok, bgr = cap.read()
+                    if not ok or bgr is None or bgr.shape != (grid.tile_height, grid.tile_width, 3):
+                        break
+                    tiles.append(bgr)
+            finally:
+                cap.release()
+    except OSError as exc:
+        raise DataError(f"cannot decode its tiles ({exc.strerror or exc})", source) from None
+    except cv2.error as exc:
+        raise DataError(f"cannot decode its tiles ({exc.msg or exc})", source) from None
+    return tiles
 
 
 def _refuse_lesser_track(
@@ -540,7 +651,7 @@ def iter_timed_frames(
     check_whole(count, info.frames, info.path, span_s(times, info.fps), info.fps)
 
 
-def frame_time_s(cap: cv2.VideoCapture) -> float:
+def frame_time_s(cap: Capture) -> float:
     """The presentation time (s) of the frame ``cap`` read last; NaN when the decoder gives
     none."""
     ms = float(cap.get(cv2.CAP_PROP_POS_MSEC))
@@ -1393,7 +1504,7 @@ def _is_path(source: int | str | Path) -> TypeGuard[str | Path]:
 
 def _open_source(
     source: int | str | Path, fps: float | None, timeout_s: float | None
-) -> tuple[cv2.VideoCapture, float | None, int, bool, int]:
+) -> tuple[Capture, float | None, int, bool, int]:
     """:func:`stream_poses`'s source opened: the capture, the frame rate it is timed by (None:
     a live source, the wall clock), the frame count its container states (0: none; a file
     served over the network, ``fps`` given, must hold them all, as a file must), whether
@@ -1441,33 +1552,45 @@ def _open_source(
         # a clock's ticks, not a frame rate (served_file_rate): the count OpenCV gives is
         # the duration at that rate; at the frames' own rate it is this many
         declared = int(declared * fps / stated)
-    return cap, fps, declared, True, _served_turn(cap, str(device), timeout_s)
+    cap, turn = _served_turn(cap, str(device), timeout_s)
+    return cap, fps, declared, True, turn
 
 
-def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> int:
-    """How the frames of ``cap``, a file an HTTP(S) server gives whole at ``url``, are turned
-    to be seen (:func:`upright`), and refused, as :func:`open_video` turns and refuses a
-    file here, from the bytes it reads of the file (:func:`.served.served_file`: its start,
-    and, where the server answers range requests, its index at its end): an MP4/MOV whose
-    display matrix mirrors its frames is turned as the matrix says less its mirror, one
-    whose first video track is a lesser one refused (:func:`_tracks_turn`), as is a HEIF
-    photo of which OpenCV decodes a part (:func:`_refuse_picture_part`). 1 (OpenCV's own
-    turning) for any other file and where those bytes cannot be read (a server that does not
-    answer range requests, an index too large: :class:`.served.Unread`), as before."""
+def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> tuple[Capture, int]:
+    """The capture to read the frames of ``cap``, a file an HTTP(S) server gives whole at
+    ``url``, from and how they are turned to be seen (:func:`upright`), or refused, as
+    :func:`open_video` reads, turns and refuses a file here, from the bytes it reads of the
+    file (:func:`.served.served_file`: its start, and, where the server answers range
+    requests, its index at its end): an MP4/MOV whose display matrix mirrors its frames is
+    turned as the matrix says less its mirror, one whose first video track is a lesser one
+    refused (:func:`_tracks_turn`); a HEIF photo of which OpenCV decodes a part is read
+    whole from its tiles, or refused (:func:`_whole_picture`: where they cannot be read
+    too); a still picture is turned by
+    its EXIF orientation (:func:`.containers.picture_orientation`). ``cap`` and 1 (OpenCV's
+    own turning) for any other file and where those bytes cannot be read (a server that
+    does not answer range requests, an index too large: :class:`.served.Unread`), as
+    before."""
     served = served_file(url, timeout_s)
     if served is None:
-        return 1
+        return cap, 1
     head = served.start[:512]
     try:
         if is_mp4(head) and heif_brand(head) is None:
-            return _tracks_turn(cap, url, mp4_video_tracks(served, served.length), 1)
+            return cap, _tracks_turn(cap, url, mp4_video_tracks(served, served.length), 1)
+        if heif_brand(head) is None:
+            return cap, picture_orientation(served, head)
         picture = heif_picture(served, served.length, head)
     except Unread:
-        return 1
+        return cap, 1
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    _refuse_picture_part(cap, url, picture, width, height)
-    return 1
+    if picture is None or (picture.width, picture.height) == (width, height):
+        return cap, 1
+    try:
+        grid = heif_grid(served, served.length, head)
+    except Unread:  # its tiles lie past what is read of a served file: refused, as before
+        grid = None
+    return _whole_picture(cap, url, picture, grid, (width, height)), 1
 
 
 NO_CAMERA = "cannot open camera: none at this index, or another program holds it"
@@ -1618,7 +1741,7 @@ def stream_poses(
 
 def _streamed(
     source: int | str | Path,
-    opened: tuple[cv2.VideoCapture, float | None, int, bool, int],
+    opened: tuple[Capture, float | None, int, bool, int],
     smoothing: bool,
     max_frames: int | None,
     estimator: PoseEstimator | None,

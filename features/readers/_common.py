@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from features.errors import DataError
+from features.fileio import GZIP_MAGIC, file_head, path_exists
 from features.text import size_words
 
 from ..poses import MAX_BYTES_ENV, read_limits
@@ -20,7 +21,7 @@ from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
 def _check_file(path: Path) -> None:
     """A DataError naming ``path`` unless it is a file to read: missing, a folder, or a pipe,
     socket or device (opened, a pipe waits for a writer that may never come)."""
-    if not path.exists():
+    if not path_exists(path):
         raise DataError("no such file", path)
     if path.is_dir():
         raise DataError("is a folder, not a file", path)
@@ -28,8 +29,15 @@ def _check_file(path: Path) -> None:
         raise DataError("is a pipe, socket or device, not a file", path)
 
 
+def gzipped(path: Path) -> bool:
+    """Whether the file at ``path`` is gzip-compressed: named ``.gz``, or starting with gzip's
+    magic bytes whatever its name (``gzip -c take.bvh > copy.bvh``, a download kept
+    compressed), which was read as text and refused as "not a BVH file"."""
+    return path.suffix == ".gz" or file_head(path, len(GZIP_MAGIC)) == GZIP_MAGIC
+
+
 def read_text(path: Path) -> str:
-    """The text of ``path`` (gzip when it ends in ``.gz``), latin-1 tolerant, newlines unified,
+    """The text of ``path`` (gzip when :func:`gzipped`), latin-1 tolerant, newlines unified,
     without a UTF-8 byte order mark; UTF-16 when it starts with a UTF-16 byte order mark.
 
     Raises DataError naming the file when it is missing, a folder, a pipe, socket or device
@@ -44,7 +52,7 @@ def read_text(path: Path) -> str:
         path,
     )
     try:
-        if path.suffix == ".gz":
+        if gzipped(path):
             # at most one byte past the limit is decompressed: a small gzip can expand to GBs
             with gzip.open(path, "rb") as fh:
                 raw = fh.read(limit + 1)

@@ -84,7 +84,7 @@ from features.errors import DataError
 from ..handedness import right_handed
 from ..poses import PoseSequence
 from ..skeleton import BLAZEPOSE_33, JOINT_INDEX
-from ._common import read_csv_matrix, to_canonical
+from ._common import gzipped, read_csv_matrix, to_canonical
 
 KINECT_JOINTS: tuple[str, ...] = (
     "Waist", "Spine", "Chest", "Neck", "Head", "HeadTip",
@@ -157,7 +157,7 @@ def uiprmd_sensor(positions_path: Path) -> str:
     problem. Raises DataError naming the file when it cannot be read."""
     widths = {len(KINECT_JOINTS) * 3: "kinect", len(VICON_MARKERS) * 3: "vicon"}
     try:
-        opener = gzip.open if positions_path.suffix == ".gz" else open
+        opener = gzip.open if gzipped(positions_path) else open
         with opener(positions_path, "rb") as fh:
             first = b""
             while not first.strip():

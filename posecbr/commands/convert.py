@@ -32,6 +32,7 @@ from features.fileio import (
     check_not_in_walked_folder,
     check_output,
     file_head,
+    path_exists,
     staged_folder,
     unique_name,
     write_text_atomic,
@@ -263,7 +264,7 @@ def _check_not_in_source(args: argparse.Namespace) -> None:
 
 def _check_args(args: argparse.Namespace) -> None:
     src: Path = args.source
-    if not src.exists():
+    if not path_exists(src):
         raise DataError("no such file or folder", src)
     check_fps(args.fps)  # the rates a pose file takes: 0.005 was refused only when written
     if args.correct and args.incorrect:
@@ -625,8 +626,8 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
             reader = csv.DictReader(fh)
             # blank rows (a trailing blank line, one of commas alone) list no clip: train
             # skips them, and they are neither counted as kept nor written back
-            rows = [dict(row) for row in reader if any(_filled(v) for v in row.values())]
-            columns = reader.fieldnames or []
+            rows = [_named(row) for row in reader if any(_filled(v) for v in row.values())]
+            columns = [c for c in reader.fieldnames or [] if c.strip()]
     except UnicodeDecodeError as exc:
         kind = binary_kind(file_head(labels))
         said = f"it is {kind}" if kind else f"not UTF-8 text: {exc.reason} at byte {exc.start}"
@@ -669,6 +670,14 @@ def _check_not_hidden(out: Path) -> None:
             " or choose another --out",
             out,
         )
+
+
+def _named(row: dict[Any, Any]) -> dict[str, Any]:
+    """A labels.csv row without the cells of columns the header leaves unnamed: the empty
+    columns a spreadsheet saves after the last one used (``path,label,,``), which train
+    leaves out (:func:`features.datasets.read_labels_csv` refuses one holding a value) and
+    which were written back as a column named ""."""
+    return {k: v for k, v in row.items() if k is not None and k.strip()}
 
 
 def _filled(value: Any) -> bool:

@@ -33,6 +33,7 @@ from features.fileio import (
     check_output,
     folders_to_make,
     path_digest,
+    path_exists,
     remove_empty,
 )
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
@@ -274,7 +275,7 @@ def find_jobs(
     video's ``overlay`` names its overlay file or, ``overlay_folder`` (a folder there, or a
     name written ending in "/"), the folder of its ``<stem>.mp4``, as several clips'
     ``overlay`` names the folder of theirs (and ``out`` the folder of the pose files)."""
-    if not source.exists():
+    if not path_exists(source):
         raise DataError("no such file or folder", source)
     if not source.is_file() and not source.is_dir():
         raise DataError("is a pipe, socket or device, not a video, folder or labels CSV", source)

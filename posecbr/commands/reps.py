@@ -120,7 +120,7 @@ def _count_one(rec: Any) -> Any:
     reference, as ``describe`` does."""
     from cbr import long_clip
     from features.derived import derived
-    from features.repetitions import count_in_signals, count_repetitions
+    from features.repetitions import count_in_signals, count_repetitions, count_seen, seen_frames
     from features.signals import state_signals
 
     chunk = long_clip.chunk_for(rec, None)
@@ -130,7 +130,11 @@ def _count_one(rec: Any) -> Any:
             # within 1e-15), sooner than numba loads its compiled kernels (0.03 s vs 0.5 s)
             derived(rec, "signals", lambda s: state_signals(s.to_canonical(), backend="numpy"))
         return count_repetitions(rec)
-    return count_in_signals(long_clip.movement_signals(rec, chunk), rec.n_frames, rec.fps)
+    sig = long_clip.movement_signals(rec, chunk)
+    a, b = seen_frames(rec, sig)  # the person lost for good: counted up to there
+    if (a, b) != (0, rec.n_frames):
+        return count_seen(rec, a, b, _count_one)
+    return count_in_signals(sig, rec.n_frames, rec.fps)
 
 
 def _print(clip: Path, fps: float, result: object) -> None:

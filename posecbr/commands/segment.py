@@ -54,7 +54,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError
-from features.fileio import check_output
+from features.fileio import check_output, path_exists
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.text import counted, shown
 from posecbr.arguments import (
@@ -165,7 +165,11 @@ RECORDING_SUFFIXES = frozenset({".npz", ".bvh", ".amc", *SHOWN_VIDEO_SUFFIXES})
 
 class _Recordings(argparse.Action):
     """RECORDING...: added to those already given after ``--truth`` (:class:`_Truth`), in the
-    order of the command line."""
+    order of the command line. ``needed``: missing when none is given, said with the other
+    arguments missing (:meth:`posecbr.cli.Parser.error`), though argparse takes it as
+    optional."""
+
+    needed = True
 
     def __call__(
         self, _parser: Any, namespace: argparse.Namespace, values: Any, _option: Any = None
@@ -224,7 +228,7 @@ def _inputs_given(args: argparse.Namespace) -> None:
     check_asf(args.asf, args.recordings)
     _truth_options(args)
     for path in args.recordings:
-        if not path.exists():
+        if not path_exists(path):
             raise DataError("no such file", path)
 
 

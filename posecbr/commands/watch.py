@@ -24,9 +24,11 @@ A live source that sends no frame for longer than a quarter second and resumes (
 ``--stall``) has the time between left missing ("no frames in the video"), as ``extract``
 leaves a gap in a video, and said so on stderr; one whose frames then come at once after a
 pause shorter than half a second (a burst: held up on the way) is put on the grid by the wall
-clock from there on, its frames a frame interval apart. One whose rate rises within its first
-4 s, before a segment is given (a stream that starts slow), is watched again from its start
-at the rate it rose to.
+clock from there on, its frames a frame interval apart. The frame after such a pause waits for
+the next to tell the two apart: one that resumes at its own pace (a drop-out: the camera's
+frames of the pause lost) has the pause left missing as a stall's. One whose rate rises
+within its first 4 s, before a segment is given (a stream that starts slow, bursts or not), is
+watched again from its start at the rate it rose to.
 
 Ctrl-C or SIGTERM (``kill``, a supervisor's stop) ends the watch as the end of a file does
 (the frame in hand is finished, the last segment printed, the ``--out`` video written, exit
@@ -63,7 +65,7 @@ from typing import Any
 
 from cbr.judges import JUDGES
 from features.errors import ConfigError, DataError, PosecbrError
-from features.fileio import PARTIAL, atomic_path, check_output, stdout_gone
+from features.fileio import PARTIAL, atomic_path, check_output, path_exists, stdout_gone
 from features.interrupts import raise_interrupt, sigterm_held
 from features.text import counted, shown
 from posecbr.arguments import PathOption, add_k_option, check_mp4_name
@@ -197,13 +199,13 @@ def _check_source(source: str) -> None:
     """A source that is a file must be a video file there is, as must the file a ``file://``
     URL names (refused as its path is: FFmpeg would say only that it cannot open it)."""
     named = _read_files(source)
-    if named and not _is_file(source) and not Path(named[0]).exists():
+    if named and not _is_file(source) and not path_exists(Path(named[0])):
         raise DataError("no such video file", Path(named[0]))
     if not source:  # an unset shell variable: Path("") is the current folder
         raise DataError("the source is empty: name a webcam index, stream URL or video file")
     if _is_file(source) and Path(source).is_dir():
         raise DataError("is a folder, not a video file", source)
-    if _is_file(source) and not Path(source).exists():
+    if _is_file(source) and not path_exists(Path(source)):
         if source.startswith("-") and source[1:].isdigit():  # OpenCV's "any camera", -1
             raise DataError(
                 "no such video file, and a camera index is a whole number from 0 (the first"
@@ -696,8 +698,12 @@ class Watcher:
         # that rose (:meth:`_remake`); None once it may not
         self.kept: list[Any] | None = None
         self.images: KeptImages | None = None  # their images, with --out
+        # those images once taken again, until the grid holds none of the kept frames (the
+        # frame on screen through a stall after them, or held after a pause: :meth:`_take`)
+        self.spent: KeptImages | None = None
         self.padding_said = False  # the note that the --out video's odd side is padded
         self.replaying = False  # the kept frames are taken again, at the rate they rose to
+        self.held_since = math.nan  # when the frame the grid holds for the next came
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
@@ -722,6 +728,7 @@ class Watcher:
         try:
             self.follow(frames, is_file, stop)
         except StreamLost:
+            self._flush()
             for segment in self.live.finish() if self.live is not None else []:
                 self._emit(segment)
             raise
@@ -745,6 +752,7 @@ class Watcher:
                 self._start(waiting)
                 waiting.clear()  # taken (kept, if at all, by :meth:`_take`): not held any longer
             self._take(frame)
+        self._flush()
         if self.stdout_gone:
             return
         if self.n == 0 and not stop.is_set():
@@ -802,6 +810,26 @@ class Watcher:
         if self.kept is not None and self._grid.rose is not None:
             self._remake(self._grid.rose)
             return
+        self._push(taken)
+        if self.spent is not None and not any(
+            isinstance(held, _Kept) for held in (self._grid.prev, self._grid.held)
+        ):
+            self.spent.close()  # no kept frame left to draw
+            self.spent = None
+        since = self._since(frame)
+        if since == since and not self.replaying:  # not NaN: the source said when it read it
+            if self._grid.held is frame:  # its label comes with the next frame's
+                self.held_since = since
+                return
+            now = time.perf_counter()
+            if self.held_since == self.held_since:  # the frame held before, given now
+                self.latency.add(now - self.held_since)
+            self.held_since = math.nan
+            self.latency.add(now - since)
+
+    def _push(self, taken: list[tuple[Any, Any, Any]]) -> None:
+        """Push the grid times the grid just gave (:meth:`Regrid.take`) to the segmenter,
+        printing the segments they finish and drawing each."""
         grid = zip(taken, self._grid.absent, self._grid.images, strict=True)
         for (world, visibility, shown_frame), absent, image in grid:
             finished = self.live.push(world, visibility, absent, image)
@@ -811,9 +839,15 @@ class Watcher:
             for segment in finished:
                 self._emit(segment)
             self._draw(shown_frame, absent)
-        since = self._since(frame)
-        if since == since and not self.replaying:  # not NaN: the source said when it read it
-            self.latency.add(time.perf_counter() - since)
+
+    def _flush(self) -> None:
+        """The stream has ended: push the grid times of the frame the grid held for the next
+        (:meth:`Regrid.flush`), if any, its latency counted."""
+        if self._grid is None or self._grid.held is None or self.stdout_gone:
+            return
+        self._push(self._grid.flush())
+        if self.held_since == self.held_since:
+            self.latency.add(time.perf_counter() - self.held_since)
 
     def _stop_keeping(self) -> None:
         """The stream's rate is followed as it is from here on: no frame kept any longer."""
@@ -846,7 +880,7 @@ class Watcher:
 
         kept, before = self.kept or [], float(self.fps or fps)
         self.kept = None
-        images, self.images = self.images, None  # closed once the kept frames are drawn
+        images, self.images = self.images, None
         print(
             f"note: {self.args.source}: the frame rate rose from {before:.3g} to {fps:.3g} fps"
             f" at {kept[-1].time_s - kept[0].time_s:.1f} s, before any segment was given:"
@@ -864,6 +898,7 @@ class Watcher:
                 self.rescue_path.unlink(missing_ok=True)
             self.writer, self.rescue_path, self.drawn = None, None, 0
         grid, grid.quiet = self._grid, True  # its notes said as the frames first came
+        self.spent = images  # closed once the grid holds no kept frame (:meth:`_take`)
         try:
             self.replaying = True
             try:
@@ -874,8 +909,6 @@ class Watcher:
             self._take(kept[-1])  # the frame in hand: its latency counted
         finally:
             grid.quiet = False
-            if images is not None:
-                images.close()
 
     def _since(self, frame: Any) -> float:
         """When ``frame`` came, from which its latency runs: a file's frame played at its
@@ -1019,9 +1052,10 @@ class Watcher:
         if self.rescue_path is not None:
             self.rescue_path.unlink(missing_ok=True)
             self.rescue_path = None
-        if self.images is not None:  # the watch ended within REMAKE_S of its start
-            self.images.close()
-            self.images = None
+        for images in (self.images, self.spent):  # the watch ended soon after its start
+            if images is not None:
+                images.close()
+        self.images = self.spent = None
 
     def _show(self, bgr: Any) -> None:
         import cv2
@@ -1254,6 +1288,13 @@ then read at once: a network's jitter; a reader held up by a slow frame) rather 
 times they came (:meth:`Regrid._placed`): 4-6 frames at once at 15 fps come after a pause of
 0.27-0.40 s. The frames that come late after a longer pause, or that all still come late a
 pause later, came after a stall, its time left missing."""
+AT_ONCE = 0.75
+"""How soon (a share of the frame interval) the frame after one held after a pause
+(:meth:`Regrid._pausing`) must come for the pause to be a burst's (frames held up on the way,
+then read as fast as the reader takes them: the pose model's 10-13 ms a frame on a free core,
+a third of a 30-fps interval, more on a busy machine) rather than a drop-out's (the stream
+resuming at its own pace: a frame interval later, give or take its jitter; one jittered by
+more than a quarter interval is taken as a burst's, as every pause was before)."""
 REMAKE_S = 4.0
 """How long after a live source's first frame a rise of its rate (a stream that starts slow:
 15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
@@ -1326,6 +1367,9 @@ class Regrid:
         # the frames taken are a re-made grid's kept ones, taken again (:meth:`Watcher._remake`):
         # its notes were said when they first came (a stall said twice, its times a little off)
         self.quiet = False
+        # a live source's frame that came after a pause (:meth:`_pausing`), held until the
+        # next frame tells a burst from a drop-out (:meth:`_released`)
+        self.held: Any = None
         if interval is not None:  # on the wall clock from the first frame, which came so
             self.resampling = self.by_clock = True
             self.interval = interval
@@ -1337,7 +1381,26 @@ class Regrid:
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
-        frame's."""
+        frame's (:attr:`absent` and :attr:`images` for each); none while this frame is held
+        (:meth:`_pausing`): the frame held before it is given first (:meth:`_released`)."""
+        held, self.held = self.held, None
+        if held is None:
+            return self._take(frame)
+        out = self._released(held, frame)
+        absent, images = self.absent, self.images
+        out += self._take(frame)
+        self.absent, self.images = absent + self.absent, images + self.images
+        return out
+
+    def flush(self) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take`'s grid times of the frame held when the stream ends (none when none
+        is): with no frame after it, placed at the time it came, as a drop-out's."""
+        held, self.held = self.held, None
+        self.absent, self.images = [], []
+        return [] if held is None else self._released(held, None)
+
+    def _take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take` of a frame when none is held."""
         from features.pose_estimation.video import strays
 
         t = frame.video_time_s
@@ -1354,16 +1417,12 @@ class Regrid:
             # a live source (or a file without frame times) at the rate it began with
             if self.rose is not None:  # to be re-made at the rate it rose to: nothing given
                 return []
-            if self._burst_begins(frame):
-                return self._resampled(frame, self._placed(frame))
-            out = self._stalled(frame)
-            if self.recent:  # the grid frame it lies on, after those left missing
-                self.recent[-1] = (frame.time_s, self.k + len(out))
-            self.prev, self.k = frame, self.k + len(out) + 1
-            self.absent, self.images = [True] * len(out) + [False], [None] * len(out)
-            self.images.append(_image(frame))
-            return [*out, (frame.seen_world, frame.visibility, frame)]
+            if self._pausing(frame):
+                return []
+            return self._counted(frame)
         if self.by_clock:  # a live source whose rate changed, at this frame or before
+            if self._rose_on_clock(frame) or self._pausing(frame):
+                return []
             return self._behind(frame) + self._resampled(frame, self._placed(frame))
         if not self.resampling:
             if not strays(t, frame.index, self.fps):
@@ -1377,6 +1436,65 @@ class Regrid:
                 " they come"
             )
         return self._resampled(frame, t)
+
+    def _counted(self, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take` of a live source's ``frame`` at the rate it began with: on the grid
+        time after the frame before's, after those it stalled for (:meth:`_stalled`)."""
+        out = self._stalled(frame)
+        if out and self.clocked and self.clocked[-1][0] == frame.time_s:
+            time_s, late_s, _count = self.clocked[-1]  # the camera's frames lost, counted
+            self.came += len(out)  # (:func:`_interval`: once a burst puts it on the clock)
+            self.clocked[-1] = (time_s, late_s, self.came)
+        if self.recent:  # the grid frame it lies on, after those left missing
+            self.recent[-1] = (frame.time_s, self.k + len(out))
+        self.prev, self.k = frame, self.k + len(out) + 1
+        self.absent, self.images = [True] * len(out) + [False], [None] * len(out)
+        self.images.append(_image(frame))
+        return [*out, (frame.seen_world, frame.visibility, frame)]
+
+    def _pausing(self, frame: Any) -> bool:
+        """Whether a live source's ``frame`` came after a pause longer than
+        :func:`features.pose_estimation.video.bridge_limit_s` but shorter than
+        :data:`BURST_S` (the second frame on: a webcam's wait for its second frame is a
+        stall), or on the grid by the wall clock, after the frame before's place by as long
+        (a burst's last frames, placed by their count, and the frames of a drop-out after
+        them lost): held (:attr:`held`, nothing given for it) until the next frame tells what
+        the pause was (:meth:`_released`)."""
+        from features.pose_estimation.video import bridge_limit_s
+
+        prev = self.prev
+        if prev is None or self.k < 2 or not frame.time_s - prev.time_s < BURST_S:
+            return False
+        pause = frame.time_s - prev.time_s
+        if self.by_clock:  # or after the frame before's place: a burst's frames placed late
+            pause = max(pause, self._on_clock(frame.time_s) - self.placed_s)
+        if not pause > bridge_limit_s(self.fps):
+            return False
+        self.held, self.absent, self.images = frame, [], []
+        return True
+
+    def _released(self, held: Any, frame: Any) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take` of the frame ``held`` after a pause (:meth:`_pausing`), told by the
+        ``frame`` after it (None: the stream ended). One that came less than :data:`AT_ONCE`
+        of a frame interval before it is the first of a burst (frames held up on the way and
+        read at once): placed a frame interval after the frame before, as the camera took it
+        (:meth:`_burst_begins`, :meth:`_placed`). Else the stream resumed at its own pace
+        after a drop-out (the camera's frames of the pause lost, not held up): the frame lies
+        at the time it came and the pause's grid times are left missing, said once on stderr
+        (:meth:`_stalled`; :meth:`_placed`'s ``resumed``), as a stall longer than
+        :data:`BURST_S` is. Before, every such pause was taken as a burst's: the frames after
+        a drop-out were placed a frame interval apart by their count, each as early as the
+        pause was long, until half a second later the lag was made up, the pause's grid times
+        left missing only then (0.27-0.45-s drop-outs every 2 s at 30 fps: 34 of 78 grid times
+        missing outside the pauses, poses up to 0.43 s off the clock)."""
+        burst = frame is not None and frame.time_s - held.time_s < AT_ONCE * self.interval
+        self.absent, self.images = [], []
+        if not self.by_clock:
+            if burst:
+                self._burst_begins(held)
+                return self._resampled(held, self._placed(held))
+            return self._counted(held)
+        return self._behind(held) + self._resampled(held, self._placed(held, resumed=not burst))
 
     def _resampled(self, frame: Any, t: float) -> list[tuple[Any, Any, Any]]:
         """:meth:`take` of a frame at ``t`` s on the grid's clock (a file's own time, a live
@@ -1424,7 +1542,7 @@ class Regrid:
         nan = np.full((len(frame.visibility),), np.nan)
         return [(np.full_like(frame.seen_world, np.nan), nan, self.prev)] * owed
 
-    def _placed(self, frame: Any) -> float:
+    def _placed(self, frame: Any, resumed: bool = False) -> float:
         """When a live source's ``frame`` lies on the grid's clock once it follows the wall
         clock (s from :attr:`origin_s`, plus what is left of a lead to make up,
         :attr:`ahead`): a frame interval after the frame before (the count's time: the
@@ -1437,12 +1555,17 @@ class Regrid:
         every frame of the latest :data:`BURST_S` has (none comes after a longer pause) is
         the stream's, a stall: made up at once, the time between left missing as before.
         Before, each frame lay at the time it came: a burst's frames fell on one grid time,
-        all but the last of them lost."""
+        all but the last of them lost. Frames that are still catching up (each less late
+        than the one before by more than a quarter of a frame interval, :data:`AT_ONCE`: a
+        burst read as fast as the reader takes frames) are placed by their count whatever
+        that lag: before, a burst after a 0.43-s pause read 0.6 of an interval apart was
+        taken for a stall once the frames before the pause had left the latest
+        :data:`BURST_S` (11 grid times missing in the middle of it at 30 fps).
+        ``resumed``: the frame came after a drop-out
+        (:meth:`_released`): at the time it came, the lag made up at once, the camera's frames
+        lost in the pause counted (:func:`_interval` counts frames)."""
         now = float(frame.time_s)
-        came = now - self.origin_s
-        lead, since = self.ahead
-        if lead > 0:  # the grid's lead over the clock, made up as the clock goes on
-            came += lead * max(0.0, 1.0 - (now - since) / (CATCH_UP * lead))
+        came = self._on_clock(now)
         clocked = self.clocked
         while clocked and clocked[0][0] <= now - RATE_WINDOW_S:
             clocked.popleft()
@@ -1453,9 +1576,51 @@ class Regrid:
             due = self.placed_s + self.interval  # the count's time
             late = came - due
             lag = min((c[1] for c in clocked if c[0] > now - BURST_S), default=late)
+            if resumed:
+                lag = late
+                self.came += max(0, round(late / self.interval))
+            elif late < clocked[-1][1] - (1.0 - AT_ONCE) * self.interval:
+                lag = 0.0  # catching up: a burst still read, as fast as the reader takes them
             placed = min(came, due + max(0.0, min(late, lag)))
         self._came(now, came - placed)
         return placed
+
+    def _on_clock(self, now: float) -> float:
+        """The wall clock's time ``now`` on the grid's clock (s from :attr:`origin_s`, plus
+        what is left of a lead to make up, :attr:`ahead`) once it follows the wall clock."""
+        came = now - self.origin_s
+        lead, since = self.ahead
+        if lead > 0:  # the grid's lead over the clock, made up as the clock goes on
+            came += lead * max(0.0, 1.0 - (now - since) / (CATCH_UP * lead))
+        return came
+
+    def _rose_on_clock(self, frame: Any) -> bool:
+        """Whether a live source already on the grid by the wall clock (a burst put it there:
+        :meth:`_burst_begins`), whose grid may yet be re-made at a rate that rises
+        (:attr:`remakable`), has risen at ``frame``: its rate over the latest
+        :data:`CHANGE_WINDOW_S` above ``fps`` by more than :data:`RATE_CHANGE` for
+        :data:`CHANGE_HOLD_S`, as :meth:`_rate_changed` takes a rise before. :attr:`rose` is
+        then the rate over the latest :data:`CHANGE_HOLD_S`, and nothing is given for
+        ``frame`` (:meth:`Watcher._remake` watches the stream again from its start). Before,
+        a rise after a burst was followed on the first rate's grid for good (15 fps, a
+        burst, then 30 fps: half the frames resampled away)."""
+        if not self.remakable:
+            return False
+        recent = self.recent
+        recent.append((frame.time_s, self.k))
+        while len(recent) > 2 and recent[1][0] <= frame.time_s - CHANGE_WINDOW_S:
+            recent.popleft()
+        rate = _frame_rate([time_s for time_s, _k in recent], CHANGE_WINDOW_S, BURST_S)
+        if rate is None or rate / self.fps - 1.0 <= RATE_CHANGE:
+            self.off_since = math.nan
+            return False
+        if not frame.time_s - self.off_since >= CHANGE_HOLD_S:  # NaN: off from now
+            if math.isnan(self.off_since):
+                self.off_since = frame.time_s
+            return False
+        latest = [c[0] for c in self.clocked if c[0] > frame.time_s - CHANGE_HOLD_S]
+        self.rose = _frame_rate([*latest, frame.time_s], CHANGE_WINDOW_S, BURST_S) or rate
+        return True
 
     def _came(self, time_s: float, late_s: float) -> None:
         """Count a live source's frame that came at ``time_s`` (the wall clock's), ``late_s``
@@ -1532,40 +1697,31 @@ class Regrid:
         )
         return True
 
-    def _burst_begins(self, frame: Any) -> bool:
-        """Whether a live source's ``frame``, at the rate it began with, comes after a pause
-        longer than :func:`features.pose_estimation.video.bridge_limit_s` but shorter than
-        :data:`BURST_S` (the second frame on: a webcam's wait for its second frame is a
-        stall): the first of a burst (frames held up on the way and read at once)
-        or a hiccup, which its next frames tell apart. From it on the source is put on the
-        grid by the wall clock (:meth:`_placed`: a burst's frames a frame interval apart by
-        their count; a lag that every frame of the latest :data:`BURST_S` keeps, a hiccup's,
-        left missing then), the grid's clock set by the latest frames (:attr:`recent`) that
-        came earliest for their grid time, and the user told once on stderr. Before, the
-        pause was a stall: its grid times left missing, then the burst's frames, one to a grid
-        time, ran that far ahead of the clock for good (bursts of 8 at 30 fps: every grid
-        time after the first burst 0.23 s late by the clock). A source that never pauses so
-        long (a steady one, jittered) is passed as it was."""
-        from features.pose_estimation.video import bridge_limit_s
-
+    def _burst_begins(self, frame: Any) -> None:
+        """Put a live source on the grid by the wall clock from ``frame``, at the rate it
+        began with the first of a burst (:meth:`_released`: frames held up on the way and
+        read at once after a pause longer than
+        :func:`features.pose_estimation.video.bridge_limit_s`): its frames a frame interval
+        apart by their count (:meth:`_placed`), the grid's clock set by the latest frames
+        (:attr:`recent`) that came earliest for their grid time, and the user told once on
+        stderr. Before (hunt 50m), the pause was a stall: its grid times left missing, then
+        the burst's frames, one to a grid time, ran that far ahead of the clock for good
+        (bursts of 8 at 30 fps: every grid time after the first burst 0.23 s late by the
+        clock). A source that never pauses so long (a steady one, jittered) is passed as it
+        was."""
         prev = self.prev
-        if prev is None or self.by_clock or self.k < 2:
-            return False
-        pause = frame.time_s - prev.time_s
-        if not bridge_limit_s(self.fps) < pause < BURST_S:
-            return False
         self.resampling = self.by_clock = True
+        self.off_since = math.nan  # a rise from here on: :meth:`_rose_on_clock`
         earlier = list(self.recent)[:-1]  # this frame's own (time_s, grid frame) left out
         self.origin_s = min(time_s - k / self.fps for time_s, k in earlier)
         self.placed_s = prev.time_s - self.origin_s
         self.clocked.pop()  # this frame, counted at its place by :meth:`_rate_changed`
         self.came -= 1
         self._note(
-            f"{pause:.2f} s without frames at {prev.time_s - self.first_s:.1f} s, then frames"
-            f" at once (held up on the way?): poses resampled to {self.fps:.3g} fps by the"
-            " clock as they come"
+            f"{frame.time_s - prev.time_s:.2f} s without frames at"
+            f" {prev.time_s - self.first_s:.1f} s, then frames at once (held up on the way?):"
+            f" poses resampled to {self.fps:.3g} fps by the clock as they come"
         )
-        return True
 
     def _stalled(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """The grid times a live source sent no frame for before ``frame``, each (missing
