@@ -169,8 +169,15 @@ def atomic_path(
     The temporary file has the permissions of an ordinary new file (umask applied). On an error
     inside the block it is removed and ``path`` is left as it was. ``suffix``: the temporary
     name's ending, for writers that choose the format by it (OpenCV's video writer).
+    ``path`` itself a temporary this process is writing (:func:`write_together`'s, given to
+    a writer that writes atomically) is written in place: its own writer renames it, and
+    removes it on an error (a temporary of a temporary, named after it, would be left by a
+    kill, which no later writer of the file removes as its own).
     """
     dest = Path(path)
+    if dest in _UNFINISHED:
+        yield dest
+        return
     _refuse_special(dest, "output")
     try:
         if make_parents:
@@ -479,20 +486,31 @@ def _names(paths: Sequence[Path]) -> str:
 
 
 def write_together(
-    files: Sequence[tuple[Path, Callable[[Path], object]]], before: str = "the earlier"
+    files: Sequence[tuple[Path, Callable[[Path], object]]],
+    before: str = "the earlier",
+    *,
+    suffixed: bool = False,
+    make_parents: bool = False,
 ) -> None:
     """Several files written as one: each by its function, given a hidden temporary beside
-    the file (:func:`temporary_file`), then all renamed into place together
-    (:func:`replace_together`). A failure anywhere (a disk full, a write refused, an I/O
-    error) leaves every file as it was, its earlier version or none, and raises one
-    DataError naming the file that failed and saying so (``before``: what it calls the files
-    there before); Ctrl-C leaves them so too."""
+    the file (:func:`temporary_file`; ``suffixed``: its name ending ``.tmp`` and the file's
+    own suffix, for writers that choose the format by the name, OpenCV's video writer and
+    matplotlib's; ``make_parents``: its folder made if need be, which a failure leaves:
+    :func:`remove_empty`), then all renamed into place together (:func:`replace_together`). A
+    failure anywhere (a disk full, a write refused, an I/O error) leaves every file as it
+    was, its earlier version or none, and raises one DataError naming the file that failed
+    and saying so (``before``: what it calls the files there before); Ctrl-C leaves them so
+    too."""
     staged: list[tuple[Path, Path]] = []
     try:
         for dest, write in files:
             try:
                 _refuse_special(dest, "output")
-                staged.append((temporary_file(dest), dest))
+                if make_parents:
+                    dest.parent.mkdir(parents=True, exist_ok=True)
+                staged.append(
+                    (temporary_file(dest, f".tmp{dest.suffix if suffixed else ''}"), dest)
+                )
                 _UNFINISHED.add(staged[-1][0])
                 write(staged[-1][0])
                 os.chmod(staged[-1][0], 0o666 & ~_umask())  # as atomic_path's
@@ -508,6 +526,30 @@ def write_together(
             with contextlib.suppress(OSError):
                 tmp.unlink(missing_ok=True)
             _UNFINISHED.discard(tmp)
+
+
+def folders_to_make(files: Iterable[Path]) -> list[Path]:
+    """The folders writing ``files`` makes, deepest first: each file's folder and those of its
+    parents that do not exist yet (:func:`remove_empty` takes them away again when the write
+    fails)."""
+    missing: set[Path] = set()
+    for dest in files:
+        for folder in dest.parents:
+            if folder in missing or folder.exists():
+                break
+            missing.add(folder)
+    return sorted(missing, key=lambda p: (-len(p.parts), str(p)))
+
+
+def remove_empty(folders: Sequence[Path]) -> None:
+    """Remove those of ``folders`` (deepest first, :func:`folders_to_make`) that nothing was
+    written into: a failed write leaves no folder it made. One that is not empty stays, and
+    so does any it is in."""
+    for folder in folders:
+        try:
+            folder.rmdir()  # only an empty folder goes
+        except OSError:
+            continue
 
 
 @contextmanager

@@ -13,6 +13,7 @@ Every file is written under a temporary name and renamed (features.fileio).
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import json
 import os
@@ -30,8 +31,10 @@ from features.fileio import (
     ReadFiles,
     check_not_in_walked_folder,
     check_output,
+    folders_to_make,
     path_digest,
     path_exists,
+    remove_empty,
 )
 from features.formats import SHOWN_VIDEO_SUFFIXES, is_video_in_folder
 from features.interrupts import interrupts_held, run_task, stop_workers, worker_ends_on_sigterm
@@ -677,10 +680,9 @@ def _fluent_words(seq: Any, top: int = 4) -> list[list[str]] | None:
 
 
 def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> tuple[Any, Any, Any]:
-    """Run the pose model over ``job``'s video and write its pose file: the sequence, its
-    image landmarks and (a variable frame rate resampled) the decoded frame of each row."""
+    """Run the pose model over ``job``'s video: the sequence its pose file holds, its image
+    landmarks and (a variable frame rate resampled) the decoded frame of each row."""
     from features.pose_estimation import estimate_video
-    from features.poses import save_pose
 
     meta: dict[str, Any] = {**job.extras, "extract_key": key, "video_sha256": digest}
     meta["source_video_digest"] = path_digest(job.video)  # which file, wherever extract ran
@@ -710,11 +712,32 @@ def _estimate(job: Job, options: Options, key: dict[str, Any], digest: str) -> t
         image_lm = image_lm[job.start : job.end]
         if video_frames is not None:
             video_frames = video_frames[job.start : job.end]
+    return seq, image_lm, video_frames
+
+
+def _write(
+    job: Job, seq: Any, image_lm: Any, video_frames: Any, draw: Callable[[Path], object] | None
+) -> None:
+    """Write ``job``'s pose file (``seq``, its image landmarks and, a variable frame rate
+    resampled, the decoded frame of each row; None: the one stored there is up to date) and
+    its overlay, drawn by ``draw`` into the path it is given (None: no overlay): both or,
+    one failing (a full disk, Ctrl-C), neither, each file there before left as it was
+    (:func:`features.fileio.write_together`), as a clip that fails leaves none of its
+    outputs. Before, the pose file was written first: an overlay that failed left its clip
+    failed and its pose file new (with ``--force``, the earlier one replaced)."""
+    from features.fileio import write_together
+    from features.poses import save_pose
+
     extra = {"image_landmarks": image_lm}
     if video_frames is not None:  # the overlay draws row i on this decoded frame
         extra["video_frames"] = video_frames
-    save_pose(seq, job.out, extra_arrays=extra)
-    return seq, image_lm, video_frames
+    if draw is None or job.overlay is None:
+        save_pose(seq, job.out, extra_arrays=extra)
+        return
+    files: list[tuple[Path, Callable[[Path], object]]] = [(job.overlay, draw)]
+    if seq is not None:
+        files.insert(0, (job.out, lambda path: save_pose(seq, path, extra_arrays=extra)))
+    write_together(files, suffixed=True, make_parents=True)
 
 
 def process(job: Job, options: Options) -> Outcome:
@@ -759,14 +782,14 @@ def process(job: Job, options: Options) -> Outcome:
         if jumps:  # the tracked person left and the model took someone else in view
             where = first_few([f"{f} ({f / seq.fps:.2f} s)" for f in jumps])
             vfr_note += f"; the pose jumps to another person at frame {where}"
+        draw = None
         if job.overlay is not None:
-            words = _fluent_words(seq) if options.fluents else None
-            write_overlay(
+            draw = functools.partial(
+                write_overlay,
                 job.video,
                 image_lm,
-                job.overlay,
-                seq.fps,
-                words,
+                fps=seq.fps,
+                words=_fluent_words(seq) if options.fluents else None,
                 frame_offset=job.start or 0,
                 video_frames=video_frames,
                 gaps=gap_rows(seq),  # no frames there: said so, not "no person"
@@ -774,6 +797,7 @@ def process(job: Job, options: Options) -> Outcome:
             )
             if padded:
                 vfr_note += f"; its overlay's {padded}"
+        _write(job, None if up_to_date else seq, image_lm, video_frames, draw)
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
         n_missing = int(nobody.sum())
@@ -1138,7 +1162,10 @@ def run(args: argparse.Namespace) -> int:
     if args.overlay is not None and args.overlay.is_dir():  # a folder there, "/" or not
         args.overlay_folder = True
     jobs = find_jobs(source, args.out, args.overlay, args.overlay_folder)
-    made = _missing_folders(args.out, jobs)
+    # out and the folders of the pose files and overlays (a class folder out/edge, made by
+    # whichever worker writes in it first): those that are not there are removed when the
+    # run fails and nothing was written into them
+    made = folders_to_make([args.out / "_", *(d for j in jobs for d in (j.out, j.overlay) if d)])
     status = 1
     try:
         _check_before_work(args, jobs)
@@ -1161,29 +1188,4 @@ def run(args: argparse.Namespace) -> int:
         return status
     finally:
         if status != 0:
-            _drop_if_empty(made)
-
-
-def _missing_folders(out: Path, jobs: list[Job]) -> list[Path]:
-    """The folders a run writing into ``out`` makes, deepest first: ``out`` and those of its
-    parents that do not exist yet, and the folders of the jobs' pose files and overlays
-    that do not (a class folder ``out/edge``, made by whichever worker writes in it first)."""
-    missing: set[Path] = set()
-    for dest in (out / "_", *(d for j in jobs for d in (j.out, j.overlay) if d is not None)):
-        for folder in dest.parents:
-            if folder in missing or folder.exists():
-                break
-            missing.add(folder)
-    return sorted(missing, key=lambda p: (-len(p.parts), str(p)))
-
-
-def _drop_if_empty(folders: list[Path]) -> None:
-    """Remove the output folders this run made (deepest first) that nothing was written
-    into (every clip of theirs failed, or the run was interrupted, a worker's clip unwound
-    in a class folder it had made): a failed run leaves no trace. A folder that existed
-    before the run is never among them."""
-    for folder in folders:
-        try:
-            folder.rmdir()  # only an empty folder goes
-        except OSError:
-            continue  # not empty (or not a folder): nor is any it is in
+            remove_empty(made)  # a failed run leaves no trace

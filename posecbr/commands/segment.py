@@ -44,10 +44,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import json
 import math
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -494,14 +495,7 @@ def run(args: argparse.Namespace) -> int:
     targets: list[Path | None] = [None] * len(done)
     if args.plot is not None:
         targets = list(plot_targets(args.plot, args.recordings, args.plot_folder))
-    for (rec, video, result), path, target, overlay in zip(
-        done, args.recordings, targets, overlays, strict=True
-    ):
-        if target is not None:
-            _plot(rec, result, target, path, [str(c) for c in clf.classes_])
-            print(f"timeline written to {shown(target)}", file=sys.stderr)
-        if overlay is not None:
-            _overlay(path, video, result, overlay, [str(c) for c in clf.classes_])
+    _write_all(done, args.recordings, targets, overlays, [str(c) for c in clf.classes_])
     # once, for every recording, when all is done (interrupted or refused on the way: one line)
     note_not_windows(stored, args.db, "segment")
     docs = [result for _, _, result in done]
@@ -675,6 +669,49 @@ def _bands(result: Any) -> list[Any]:
     ]
 
 
+def _write_all(
+    done: list[tuple[Any, Any, Any]],
+    recordings: list[Path],
+    targets: list[Path | None],
+    overlays: list[Path | None],
+    activities: Sequence[str],
+) -> None:
+    """Every picture (``targets``) and overlay of the recordings segmented (``done``:
+    recording, video, result) written as one (:func:`features.fileio.write_together`): all
+    of them or, one failing (a full disk, Ctrl-C, SIGTERM), none, each file there before
+    left as it was and a folder made for them removed, as a recording refused leaves no
+    output of the others (:func:`run`). Each is said once all are in place. Before, they
+    were written in turn: the files of the recordings before one that failed were left."""
+    from features.fileio import folders_to_make, remove_empty, write_together
+    from features.pose_estimation.overlay import padding_words
+
+    files: list[tuple[Path, Callable[[Path], object]]] = []
+    said: list[str] = []
+    for (rec, video, result), path, target, overlay in zip(
+        done, recordings, targets, overlays, strict=True
+    ):
+        if target is not None:
+            files.append((target, functools.partial(_plot, rec, result, recording=path,
+                                                     activities=activities)))  # fmt: skip
+            said.append(f"timeline written to {shown(target)}")
+        if overlay is not None:
+            files.append((overlay, functools.partial(_overlay, path, video, result,
+                                                     activities=activities)))  # fmt: skip
+            padded = padding_words(video.info.width, video.info.height)
+            said += [f"note: {shown(overlay)}: {padded}"] if padded else []
+            said.append(f"overlay written to {shown(overlay)}")
+    if not files:
+        return
+    made = folders_to_make([dest for dest, _ in files])  # --plot DIR/, --overlay DIR/
+    try:
+        write_together(files, suffixed=True, make_parents=True)
+    except BaseException:
+        remove_empty(made)
+        raise
+    for line in said:
+        print(line, file=sys.stderr)
+
+
 def _plot(
     rec: Any, result: Any, path: Path, recording: Path, activities: Sequence[str] = ()
 ) -> None:
@@ -821,7 +858,7 @@ def _overlay(
     its colour, as in ``segment --plot``."""
     import numpy as np
 
-    from features.pose_estimation.overlay import padding_words, write_overlay
+    from features.pose_estimation.overlay import write_overlay
     from features.poses import gap_rows
 
     gaps = gap_rows(video.sequence)  # no frames there: said so, not "no person"
@@ -837,7 +874,3 @@ def _overlay(
         gaps=gaps,
         mark=overlay_mark(path),
     )
-    padded = padding_words(video.info.width, video.info.height)
-    if padded:
-        print(f"note: {shown(out)}: {padded}", file=sys.stderr)
-    print(f"overlay written to {shown(out)}", file=sys.stderr)

@@ -48,8 +48,10 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
+import errno
 import json
 import math
+import os
 import queue
 import signal
 import statistics
@@ -695,6 +697,11 @@ class Watcher:
         # a live source's frames since its first, while its grid may be re-made at a rate
         # that rose (:meth:`_remake`); None once it may not
         self.kept: list[Any] | None = None
+        self.images: KeptImages | None = None  # their images, with --out
+        # those images once taken again, until the grid holds none of the kept frames (the
+        # frame on screen through a stall after them, or held after a pause: :meth:`_take`)
+        self.spent: KeptImages | None = None
+        self.padding_said = False  # the note that the --out video's odd side is padded
         self.replaying = False  # the kept frames are taken again, at the rate they rose to
         self.held_since = math.nan  # when the frame the grid holds for the next came
         self.started = time.perf_counter()
@@ -743,6 +750,7 @@ class Watcher:
                     if self.fps is None:
                         continue
                 self._start(waiting)
+                waiting.clear()  # taken (kept, if at all, by :meth:`_take`): not held any longer
             self._take(frame)
         self._flush()
         if self.stdout_gone:
@@ -767,6 +775,11 @@ class Watcher:
         self._grid = Regrid(fps, self.args.source)
         if waiting:
             self.kept, self._grid.remakable = [], True
+            if self.args.out is not None:
+                try:
+                    self.images = KeptImages(self.args.out.parent)
+                except OSError as exc:
+                    self._not_kept(exc)
         for early in waiting[:-1]:
             self._take(early)
 
@@ -787,14 +800,22 @@ class Watcher:
         kept = self.kept
         if kept is not None and not self.replaying:
             if self.emitted or (kept and frame.time_s - kept[0].time_s > REMAKE_S):
-                self.kept, self._grid.remakable = None, False  # too late: followed as it is
+                self._stop_keeping()  # too late: followed as it is
             else:
-                kept.append(_Kept.of(frame, self.args.out is not None))
+                try:
+                    kept.append(_Kept.of(frame, self.images))
+                except OSError as exc:
+                    self._not_kept(exc)
         taken = self._grid.take(frame)
         if self.kept is not None and self._grid.rose is not None:
             self._remake(self._grid.rose)
             return
         self._push(taken)
+        if self.spent is not None and not any(
+            isinstance(held, _Kept) for held in (self._grid.prev, self._grid.held)
+        ):
+            self.spent.close()  # no kept frame left to draw
+            self.spent = None
         since = self._since(frame)
         if since == since and not self.replaying:  # not NaN: the source said when it read it
             if self._grid.held is frame:  # its label comes with the next frame's
@@ -828,6 +849,24 @@ class Watcher:
         if self.held_since == self.held_since:
             self.latency.add(time.perf_counter() - self.held_since)
 
+    def _stop_keeping(self) -> None:
+        """The stream's rate is followed as it is from here on: no frame kept any longer."""
+        self.kept, self._grid.remakable = None, False
+        if self.images is not None:
+            self.images.close()
+            self.images = None
+
+    def _not_kept(self, exc: OSError) -> None:
+        """The kept frames' images cannot be written (:class:`KeptImages`: a full disk): said,
+        and the stream followed at its first rate, as after :data:`REMAKE_S`."""
+        print(
+            f"note: {shown(self.args.out)}: the first frames cannot be kept to be drawn again"
+            f" ({exc.strerror or exc}): a rise of the stream's frame rate is followed at its"
+            " first rate",
+            file=sys.stderr,
+        )
+        self._stop_keeping()
+
     def _remake(self, fps: float) -> None:
         """Watch a live source again from its first frame at ``fps``, the rate it rose to
         within :data:`REMAKE_S` of it, before any segment was given (:attr:`kept`): a new
@@ -841,6 +880,7 @@ class Watcher:
 
         kept, before = self.kept or [], float(self.fps or fps)
         self.kept = None
+        images, self.images = self.images, None
         print(
             f"note: {self.args.source}: the frame rate rose from {before:.3g} to {fps:.3g} fps"
             f" at {kept[-1].time_s - kept[0].time_s:.1f} s, before any segment was given:"
@@ -857,13 +897,18 @@ class Watcher:
             if self.rescue_path is not None:
                 self.rescue_path.unlink(missing_ok=True)
             self.writer, self.rescue_path, self.drawn = None, None, 0
-        self.replaying = True
+        grid, grid.quiet = self._grid, True  # its notes said as the frames first came
+        self.spent = images  # closed once the grid holds no kept frame (:meth:`_take`)
         try:
-            for frame in kept[:-1]:
-                self._take(frame)
+            self.replaying = True
+            try:
+                for frame in kept[:-1]:
+                    self._take(frame)
+            finally:
+                self.replaying = False
+            self._take(kept[-1])  # the frame in hand: its latency counted
         finally:
-            self.replaying = False
-        self._take(kept[-1])  # the frame in hand: its latency counted
+            grid.quiet = False
 
     def _since(self, frame: Any) -> float:
         """When ``frame`` came, from which its latency runs: a file's frame played at its
@@ -992,8 +1037,9 @@ class Watcher:
             size = even_size(w, h)  # an odd side padded, not cut by the writer
             fps = float(self.fps or 30.0)
             self.writer = Recording(self.rescue_path, fps, size, str(self.args.out))
-            if padding_words(w, h):
+            if padding_words(w, h) and not self.padding_said:  # once: not again at a re-make
                 print(f"note: {shown(self.args.out)}: {padding_words(w, h)}", file=sys.stderr)
+                self.padding_said = True
         self.writer.write(pad_even(bgr))
         self.drawn += 1
 
@@ -1006,6 +1052,10 @@ class Watcher:
         if self.rescue_path is not None:
             self.rescue_path.unlink(missing_ok=True)
             self.rescue_path = None
+        for images in (self.images, self.spent):  # the watch ended soon after its start
+            if images is not None:
+                images.close()
+        self.images = self.spent = None
 
     def _show(self, bgr: Any) -> None:
         import cv2
@@ -1070,8 +1120,8 @@ class Watcher:
 @dataclasses.dataclass(frozen=True)
 class _Kept:
     """A live source's frame kept while its grid may be re-made (:attr:`Watcher.kept`): what
-    the grid and the drawing read of it, its image (``rgb``) only when it is to be drawn
-    again (``--out``), None else."""
+    the grid and the drawing read of it, and where its image is kept to be drawn again
+    (``--out``: :class:`KeptImages`; None else), read back as :attr:`rgb`."""
 
     index: int
     time_s: float
@@ -1080,10 +1130,10 @@ class _Kept:
     seen_world: Any
     visibility: Any
     pose: Any
-    rgb: Any
+    image: tuple[KeptImages, int, tuple[int, ...], Any] | None
 
     @classmethod
-    def of(cls, frame: Any, image: bool) -> _Kept:
+    def of(cls, frame: Any, images: KeptImages | None) -> _Kept:
         return cls(
             frame.index,
             frame.time_s,
@@ -1092,8 +1142,66 @@ class _Kept:
             frame.seen_world,
             frame.visibility,
             frame.pose,
-            frame.rgb if image else None,
+            None if images is None else images.put(frame.rgb),
         )
+
+    @property
+    def rgb(self) -> Any:
+        """The frame's image, as the stream gave it (read back from its :class:`KeptImages`)."""
+        if self.image is None:
+            return None
+        images, offset, shape, dtype = self.image
+        return images.get(offset, shape, dtype)
+
+
+class KeptImages:
+    """The images of a live source's frames kept to be drawn again (:attr:`Watcher.kept`,
+    with ``--out``), in an unnamed temporary file in the folder of the ``--out`` video (the
+    file system's own: no name a kill could leave behind), not in memory: 4 s of 1920x1080
+    at 30 fps is 750 MB of images (docs/measurements.md: a 1080p stream that rose at 3.5 s
+    peaked at 937 MB, now 586 MB, its video the same bytes). Their bytes are written as
+    they are, not compressed: a lossless PNG of a 1080p frame took 126-256 ms to encode
+    here (TIFF's LZW 74 ms), where a frame of a 30-fps stream has 33 ms; written, one
+    takes a copy."""
+
+    def __init__(self, folder: Path) -> None:
+        import tempfile
+
+        # unbuffered: a write that fails (a full disk) fails in put, not in a later flush
+        self.file = tempfile.TemporaryFile(dir=folder, buffering=0)  # noqa: SIM115 - close
+        self.size = 0
+
+    def put(self, rgb: Any) -> tuple[KeptImages, int, tuple[int, ...], Any]:
+        """Keep ``rgb``; where it is, to :meth:`get` it back with. Raises OSError (a full disk)."""
+        import numpy as np
+
+        data = np.ascontiguousarray(rgb).data.cast("B")
+        offset, done = self.size, 0
+        self.file.seek(offset)
+        while done < len(data):
+            written = self.file.write(data[done:])
+            if not written:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            done += written
+        self.size += len(data)
+        return self, offset, tuple(rgb.shape), rgb.dtype
+
+    def get(self, offset: int, shape: tuple[int, ...], dtype: Any) -> Any:
+        """The image :meth:`put` kept at ``offset``."""
+        import numpy as np
+
+        image = np.empty(shape, dtype=dtype)
+        view, done = image.data.cast("B"), 0
+        self.file.seek(offset)
+        while done < len(view):
+            read = self.file.readinto(view[done:])
+            if not read:
+                raise OSError(errno.EIO, "the kept images' file ended early")
+            done += read
+        return image
+
+    def close(self) -> None:
+        self.file.close()
 
 
 class Latencies:
@@ -1191,8 +1299,8 @@ REMAKE_S = 4.0
 """How long after a live source's first frame a rise of its rate (a stream that starts slow:
 15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
 its start at the new rate (:meth:`Watcher._remake`), before any segment is given: its
-frames are kept until then (with ``--out``, their images to draw again: 4 s of 640x480 at
-30 fps is 110 MB). A later rise is followed on the first rate's grid by the wall clock."""
+frames are kept until then (with ``--out``, their images to draw again, in a file:
+:class:`KeptImages`). A later rise is followed on the first rate's grid by the wall clock."""
 CATCH_UP = 4.0
 """Over how many times its length the lead a live source's frames ran ahead of the wall clock
 by, before its rate's rise was taken, is made up (:meth:`Regrid._rate_changed`): the grid's
@@ -1256,12 +1364,20 @@ class Regrid:
         # segmenter) at it (:meth:`Watcher._remake`), not followed here: then the rate
         self.remakable = False
         self.rose: float | None = None
+        # the frames taken are a re-made grid's kept ones, taken again (:meth:`Watcher._remake`):
+        # its notes were said when they first came (a stall said twice, its times a little off)
+        self.quiet = False
         # a live source's frame that came after a pause (:meth:`_pausing`), held until the
         # next frame tells a burst from a drop-out (:meth:`_released`)
         self.held: Any = None
         if interval is not None:  # on the wall clock from the first frame, which came so
             self.resampling = self.by_clock = True
             self.interval = interval
+
+    def _note(self, words: str) -> None:
+        """Say ``words`` of the source on stderr, unless :attr:`quiet`."""
+        if not self.quiet:
+            print(f"note: {self.source}: {words}", file=sys.stderr)
 
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
@@ -1314,11 +1430,10 @@ class Regrid:
                 self.absent, self.images = [False], [_image(frame)]
                 return [(frame.seen_world, frame.visibility, frame)]
             self.resampling = True
-            print(
-                f"note: {self.source}: variable frame rate (frame {frame.index} is at"
-                f" {t:.3f} s, not {frame.index / self.fps:.3f} s): poses resampled to"
-                f" {self.fps:g} fps as they come",
-                file=sys.stderr,
+            self._note(
+                f"variable frame rate (frame {frame.index} is at {t:.3f} s, not"
+                f" {frame.index / self.fps:.3f} s): poses resampled to {self.fps:g} fps as"
+                " they come"
             )
         return self._resampled(frame, t)
 
@@ -1406,11 +1521,11 @@ class Regrid:
         self.prev, self.placed_s = frame, t
         self.absent += gap
         if any(gap) and not self.by_clock:
-            print(f"note: {self.source}: {gap_words([(start, t)])}", file=sys.stderr)
+            self._note(gap_words([(start, t)]))
         elif any(gap):  # as :meth:`_stalled` says it, from the first frame
             since = self.origin_s - self.first_s
             words = gap_words([(start + since, t + since)])
-            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
+            self._note(f"the stream stalled: {words}")
         return out
 
     def _behind(self, frame: Any) -> list[tuple[Any, Any, Any]]:
@@ -1575,11 +1690,10 @@ class Regrid:
                 f" {CATCH_UP * lead:.1f} s: the frames before, counted at the old rate, ran"
                 " that far ahead of it)"
             )
-        print(
-            f"note: {self.source}: the frame rate changed from {self.fps:.3g} to {rate:.3g} fps"
-            f" at {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
-            f" the clock as they come{behind}",
-            file=sys.stderr,
+        self._note(
+            f"the frame rate changed from {self.fps:.3g} to {rate:.3g} fps at"
+            f" {frame.time_s - self.first_s:.1f} s: poses resampled to {self.fps:.3g} fps by"
+            f" the clock as they come{behind}"
         )
         return True
 
@@ -1603,11 +1717,10 @@ class Regrid:
         self.placed_s = prev.time_s - self.origin_s
         self.clocked.pop()  # this frame, counted at its place by :meth:`_rate_changed`
         self.came -= 1
-        print(
-            f"note: {self.source}: {frame.time_s - prev.time_s:.2f} s without frames at"
+        self._note(
+            f"{frame.time_s - prev.time_s:.2f} s without frames at"
             f" {prev.time_s - self.first_s:.1f} s, then frames at once (held up on the way?):"
-            f" poses resampled to {self.fps:.3g} fps by the clock as they come",
-            file=sys.stderr,
+            f" poses resampled to {self.fps:.3g} fps by the clock as they come"
         )
 
     def _stalled(self, frame: Any) -> list[tuple[Any, Any, Any]]:
@@ -1643,7 +1756,7 @@ class Regrid:
         missing = max(0, min(between, behind))
         if missing:
             words = gap_words([(prev.time_s - self.first_s, frame.time_s - self.first_s)])
-            print(f"note: {self.source}: the stream stalled: {words}", file=sys.stderr)
+            self._note(f"the stream stalled: {words}")
         nan = np.full((len(frame.visibility),), np.nan)
         return [(np.full_like(frame.seen_world, np.nan), nan, prev)] * missing
 
