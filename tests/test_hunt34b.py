@@ -43,6 +43,7 @@ def test_classify_summary_gives_the_accuracy_as_a_percentage(
         "wrong": [{"clip": "d.npz", "label": "a", "true_label": "b"}],
         "unlike_cases": [],
         "unclassifiable": [],
+        "answers": {"a": 3, "b": 1},
     }
     _print_summary(summary, "label", [])
     out = capsys.readouterr().out
