@@ -84,11 +84,15 @@ def read_text(path: Path) -> str:
 
 
 def read_csv_matrix(path: Path, n_columns: int) -> np.ndarray:
-    """A numeric comma-separated file as ``(rows, n_columns)`` float64.
+    """A numeric comma-separated file as ``(rows, n_columns)`` float64; blank lines are no row.
 
-    Raises DataError naming the file and line for a row of the wrong width or a non-number.
+    Raises DataError naming the file and line (the file's own line number, blank lines
+    counted) for a row of the wrong width or a non-number, and line and column for the first
+    number that is not finite (``nan``, ``inf``, or beyond float64's range).
     """
-    rows = [line for line in read_text(path).split("\n") if line.strip()]
+    lines = read_text(path).split("\n")
+    numbers = [i + 1 for i, line in enumerate(lines) if line.strip()]
+    rows = [lines[n - 1] for n in numbers]
     if not rows:
         raise DataError("file is empty", path)
     # Fast path: numpy's parser reads all rows at once; any shape or number problem falls
@@ -98,25 +102,34 @@ def read_csv_matrix(path: Path, n_columns: int) -> np.ndarray:
     except ValueError:
         fast = None
     if fast is not None and fast.shape == (len(rows), n_columns):
-        if not np.isfinite(fast).all():
-            raise DataError("contains non-finite numbers", path)
+        _check_finite(fast, rows, numbers, path)
         return fast
     out = np.empty((len(rows), n_columns))
-    for i, line in enumerate(rows):
+    for i, (line_no, line) in enumerate(zip(numbers, rows, strict=True)):
         parts = line.split(",")
         if len(parts) != n_columns:
             raise DataError(
-                f"line {i + 1}: expected {n_columns} comma-separated numbers, got {len(parts)}"
+                f"line {line_no}: expected {n_columns} comma-separated numbers, got {len(parts)}"
                 " (truncated or not this format?)",
                 path,
             )
         try:
             out[i] = [float(p) for p in parts]
         except ValueError:
-            raise DataError(f"line {i + 1}: not a number in {line[:60]!r}", path) from None
-    if not np.isfinite(out).all():
-        raise DataError("contains non-finite numbers", path)
+            raise DataError(f"line {line_no}: not a number in {line[:60]!r}", path) from None
+    _check_finite(out, rows, numbers, path)
     return out
+
+
+def _check_finite(values: np.ndarray, rows: list[str], numbers: list[int], path: Path) -> None:
+    """Refuse ``values`` (one row per line of ``rows``, the file's lines ``numbers``) holding a
+    number that is not finite, naming the first one's line, column and text."""
+    bad = np.argwhere(~np.isfinite(values))
+    if len(bad):
+        row, col = (int(v) for v in bad[0])
+        text = rows[row].split(",")[col].strip()
+        where = f"line {numbers[row]}, column {col + 1}"
+        raise DataError(f"contains non-finite numbers: the first, {text[:30]!r}, at {where}", path)
 
 
 def to_canonical(

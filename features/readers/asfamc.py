@@ -482,6 +482,7 @@ class _AmcFrames:
         self.first: set[str] | None = None
         self.number: int | None = None  # the frame number last read, as the file has it
         self.first_number = 1
+        self.opening: str | None = None  # the bone the current frame began with
 
     def next_frame(self, line_no: int, number: int) -> None:
         """A frame number: one more than the frame before it (a gap would join the frames
@@ -533,12 +534,23 @@ class _AmcFrames:
                 self.path,
             )
         if name in self.seen:
-            raise DataError(
-                f"line {line_no}: bone {name!r} is listed twice in frame {self.number}",
-                self.path,
-            )
+            raise DataError(f"line {line_no}: {self._twice(name)}", self.path)
+        if not self.seen:
+            self.opening = name
         self.rows.setdefault(name, []).append(tokens[1:])
         self.seen.add(name)
+
+    def _twice(self, name: str) -> str:
+        """Bone ``name`` comes again in the current frame, in words. When it is the bone the
+        frame began with and the frame has listed every bone the first frame lists, the next
+        frame's bones follow without their frame number (a line lost)."""
+        complete = self.first is None or self.seen >= self.first
+        if complete and name == self.opening:
+            return (
+                f"bone {name!r} again after every bone of frame {self.number}: the frame number"
+                f" after frame {self.number} is missing"
+            )
+        return f"bone {name!r} is listed twice in frame {self.number}"
 
     def values(self) -> dict[str, np.ndarray]:
         """Per bone its values ``(frames, n_dof)``, once every frame is checked complete."""

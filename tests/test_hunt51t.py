@@ -1,0 +1,82 @@
+"""Hunt 51t: leftovers of session 51's hunts.
+
+- Messages name the place in the file as the user's editor numbers it: an AMC file with a
+  frame number missing said "bone 'root' is listed twice in frame 3" (the bones of the frame
+  after it, its number lost, taken for frame 3's); a UI-PRMD file's number that is not finite
+  said "contains non-finite numbers" with no line; a row of the wrong width or a word in a
+  UI-PRMD file was numbered after blank lines were skipped.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from features.errors import DataError
+from tests.test_bad_input_datasets import ASF, ROW
+
+
+def _amc_frame(number: int | None) -> str:
+    bones = "root 0 0 0 0 0 0\nlfemur 0 0 0\n"
+    return bones if number is None else f"{number}\n{bones}"
+
+
+def _amc_refusal(folder: Path, frames: str) -> str:
+    from features.readers.asfamc import read_amc, read_asf
+
+    (folder / "skel.asf").write_text(ASF)
+    (folder / "walk.amc").write_text(":FULLY-SPECIFIED\n:DEGREES\n" + frames)
+    with pytest.raises(DataError) as err:
+        read_amc(folder / "walk.amc", read_asf(folder / "skel.asf"))
+    return str(err.value)
+
+
+def test_an_amc_frame_without_its_number_is_said_to_lack_it(tmp_path: Path) -> None:
+    # frames 1-3, then frame 4's bones with the line "4" lost, then frame 5: line 12 is the
+    # root of the frame after frame 3 (2 header lines + 3 frames of 3 lines)
+    lost = _amc_refusal(tmp_path, "".join(_amc_frame(n) for n in (1, 2, 3, None, 5)))
+    assert lost.endswith(
+        "walk.amc: line 12: bone 'root' again after every bone of frame 3: the frame number"
+        " after frame 3 is missing"
+    )
+    # frame 2 lists root twice before its lfemur: no frame number can be lost there
+    twice = _amc_refusal(tmp_path, _amc_frame(1) + "2\nroot 0 0 0 0 0 0\n" + _amc_frame(None))
+    assert twice.endswith("walk.amc: line 8: bone 'root' is listed twice in frame 2")
+
+
+def _uiprmd_kinect(folder: Path, positions: str, angles: str) -> Path:
+    (folder / "m01_s01_e01_angles.txt").write_text(angles)
+    path = folder / "m01_s01_e01_positions.txt"
+    path.write_text(positions)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("positions", "said"),
+    [
+        # line 1 blank, line 2 a row, line 3 blank, line 4 a row whose 5th number is nan
+        (
+            "\n" + ROW + "\n" + ROW.replace("1.0", "nan", 5).replace("nan", "1.0", 4),
+            "contains non-finite numbers: the first, 'nan', at line 4, column 5",
+        ),
+        # an inf with a space before it: the first number of line 3
+        (
+            ROW + ROW + ROW.replace("1.0", " inf", 1),
+            "contains non-finite numbers: the first, 'inf', at line 3, column 1",
+        ),
+        # blank lines before the short row: the file's line 5, not the third row
+        (ROW + "\n\n" + ROW + "1,2,3\n", "line 5: expected 66 comma-separated numbers, got 3"),
+        (ROW + "\n" + ROW.replace("1.0", "x", 1), "line 3: not a number in 'x,1.0,"),
+    ],
+    ids=["nan", "inf", "short row", "word"],
+)
+def test_a_uiprmd_files_bad_number_is_named_by_the_files_own_line(
+    tmp_path: Path, positions: str, said: str
+) -> None:
+    from features.readers.uiprmd import read_uiprmd_kinect_joints
+
+    path = _uiprmd_kinect(tmp_path, positions, ROW * 2)
+    with pytest.raises(DataError) as err:
+        read_uiprmd_kinect_joints(path)
+    assert f"m01_s01_e01_positions.txt: {said}" in str(err.value), str(err.value)
