@@ -90,8 +90,12 @@ def join_repetitions(
     every frame of the result (:attr:`Joined.labels`). The recording keeps the metadata its
     repetitions hold alike (:func:`_shared_metadata`): the first repetition's label of
     correct or incorrect, its episode and the file it was converted from were the whole
-    recording's. Its ``source`` stays the first repetition's (name the recording with
-    ``with_metadata(source=...)``).
+    recording's. Its ``source`` is every repetition's, in order, joined by :data:`JOINED_BY`
+    (:func:`joined_source`): it was the first repetition's, so the recording was named by
+    one file it holds a part of, saved as made from it, and two recordings that begin with
+    the same repetition were taken for one (a training case's source is the recording its
+    held-out checks leave out). Name it otherwise with ``dataclasses.replace(seq,
+    source=...)``; ``with_metadata(source=...)`` sets a metadata key, not the source.
 
     Raises DataError for no repetitions, differing frame rates, a repetition without a
     frame that shows both hips, or as many labels as repetitions not given."""
@@ -124,6 +128,7 @@ def join_repetitions(
         length += len(p)
     seq = replace(
         reps[0].to_canonical(),
+        source=joined_source(reps),
         positions=np.concatenate(parts),
         confidence=None,
         metadata={**_shared_metadata(reps), "joined_repetitions": len(reps)},
@@ -133,6 +138,16 @@ def join_repetitions(
         None if labels is None else _frame_labels(labels, starts_a, n_blend, len(seq.positions))
     )
     return Joined(seq, starts_a, np.asarray(jumps), per_frame)
+
+
+JOINED_BY = " + "
+"""What separates the repetitions' sources in a joined recording's source."""
+
+
+def joined_source(reps: Sequence[PoseSequence]) -> str:
+    """The source of ``reps`` joined: each one's, in order, those without one left out
+    (empty when none has one: a recording without a source, as each of its parts was)."""
+    return JOINED_BY.join(r.source for r in reps if r.source)
 
 
 PIECE_KEYS = ("frame_offset", "origin")

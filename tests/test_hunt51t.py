@@ -5,6 +5,9 @@
   after it, its number lost, taken for frame 3's); a UI-PRMD file's number that is not finite
   said "contains non-finite numbers" with no line; a row of the wrong width or a word in a
   UI-PRMD file was numbered after blank lines were skipped.
+- A recording joined from repetitions (``features.joining.join_repetitions``) is made from
+  all of them: its source was the first repetition's file, so two recordings that begin
+  with the same repetition were one recording to the case base's held-out checks.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from features.errors import DataError
+from features.poses import PoseSequence
 from tests.test_bad_input_datasets import ASF, ROW
 
 
@@ -80,3 +84,23 @@ def test_a_uiprmd_files_bad_number_is_named_by_the_files_own_line(
     with pytest.raises(DataError) as err:
         read_uiprmd_kinect_joints(path)
     assert f"m01_s01_e01_positions.txt: {said}" in str(err.value), str(err.value)
+
+
+def test_recordings_joined_from_the_same_first_repetition_are_two_recordings() -> None:
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.unknown import held_out_basis
+    from features.joining import join_repetitions
+    from tests.bodies import squat_clip
+
+    def joined(*parts: tuple[float, str]) -> PoseSequence:
+        return join_repetitions([squat_clip(d, 30, source=name) for d, name in parts]).seq
+
+    deep = [joined((0.95, "a.npz"), (0.9, "b.npz")), joined((0.95, "a.npz"), (0.92, "c.npz"))]
+    shallow = [joined((0.4, "d.npz"), (0.45, "e.npz"))]
+    assert [s.source for s in deep] == ["a.npz + b.npz", "a.npz + c.npz"]
+    clf = CaseBaseClassifier(k=1).fit([*deep, *shallow], ["deep", "deep", "shallow"])
+    # deep squats from two recordings: each held out from the other's cases, not by time
+    # within one recording named a.npz (which both were)
+    basis, groups = held_out_basis(clf.case_base_)
+    assert basis == "recording"
+    assert len(set(groups.tolist())) == 3
