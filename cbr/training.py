@@ -41,7 +41,7 @@ from features.errors import ConfigError, DataError, InputError, PosecbrError
 from features.interrupts import stored_before
 from features.poses import PoseSequence
 from features.progress import progress
-from features.text import counted, did_you_mean
+from features.text import counted, did_you_mean, spelt_as
 
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
@@ -1066,6 +1066,11 @@ def append_described(
         with store.transaction() as tx:
             info = tx.expect(name, uid)
             held = set(info.label_counts)  # another append may have added some since read
+            # an activity the case base holds, spelt in other Unicode characters (a label
+            # from a macOS file name beside one typed), is that activity: it was a second
+            # one, printed the same
+            text = spelt_as(text, info.label_counts)
+            cb.labels = np.array(text, dtype=object)
             _check_new(tx, info, clips, store.where)
             ids = np.asarray(tx.add_cases(info, case_records(cb)))
             judges_after_change(tx, info)

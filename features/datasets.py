@@ -50,6 +50,7 @@ from features.fileio import as_path, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES, TS_SUFFIX, is_mpeg_ts
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 from features.progress import progress
+from features.text import spelt_among
 
 from .handedness import right_handed
 from .label_tracks import (
@@ -335,7 +336,7 @@ def check_no_overlaps(
     tracked: dict[Path, dict[str, Any]] = {}
     for rec in read_labels_csv(csv_path):
         key = rec["path"].resolve()
-        if rec["track"] is None and labels is not None and rec["label"] not in labels:
+        if rec["track"] is None and labels is not None and not spelt_among(rec["label"], labels):
             continue
         if key in tracked or (rec["track"] is not None and key in by_file):
             first = tracked.get(key) or by_file[key][0]
@@ -1129,9 +1130,9 @@ def _keep(
     correct: bool | None,
 ) -> bool:
     """Whether a clip passes the filters; unknown values (None) pass until they are known."""
-    if labels is not None and label is not None and label not in labels:
+    if labels is not None and label is not None and not spelt_among(label, labels):
         return False
-    if subjects is not None and subject is not None and subject not in subjects:
+    if subjects is not None and subject is not None and not spelt_among(subject, subjects):
         return False
     if movements is not None and extra(extras, "movement") not in movements:
         return False

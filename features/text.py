@@ -105,8 +105,10 @@ __all__ = [
     "did_you_mean",
     "hide_passwords",
     "percent",
+    "same_text",
     "shown",
     "size_words",
+    "spelt_among",
     "spelt_as",
 ]
 
@@ -129,6 +131,22 @@ def spelt_as(values: Iterable[object], known: Iterable[object]) -> list[str]:
         like = None if value in have else canonical.get(unicodedata.normalize("NFC", value))
         out.append(like if like is not None else value)
     return out
+
+
+def same_text(value: object) -> str:
+    """``value`` as text in its canonical composition (NFC), what :func:`spelt_as` compares:
+    "Plié" typed (é one character) and "Plié" from a macOS file name (e and a combining
+    accent) give one key."""
+    return unicodedata.normalize("NFC", str(value))
+
+
+def spelt_among(value: object, values: Iterable[object]) -> bool:
+    """Whether ``value`` is one of ``values``, as it is or in other Unicode characters
+    (:func:`same_text`): a ``--labels`` entry typed "Plié" keeps the clips a file names
+    "Plié" with e and a combining accent, where it kept none and was refused naming labels
+    that looked the same."""
+    key = same_text(value)
+    return any(same_text(v) == key for v in values)
 
 
 def did_you_mean(typed: str, known: Iterable[object]) -> str:

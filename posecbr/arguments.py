@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from features.errors import ConfigError, DataError, PosecbrError
+from features.text import same_text, spelt_among
 
 #: what ``-k N`` means in every command that votes with the nearest cases (train, classify,
 #: compare, segment, watch): one meaning for one letter, said in the same words; what differs
@@ -154,13 +155,15 @@ def check_found(
     ``found`` is (mistyped): the work on the others alone would be taken for the one asked
     for. ``what`` says what a clip is to have it ("labelled", "of subject"); ``data``: where
     the clips are from (DATA); ``held``: called on a refusal alone, the values the data hold
-    (the clips ``found`` are filtered already), named so the user sees what to give."""
-    have = {str(v) for v in found if v is not None}
-    missing = sorted(set(asked or ()) - have)
+    (the clips ``found`` are filtered already), named so the user sees what to give. An
+    entry is a value in other Unicode characters too (:func:`features.text.same_text`), as
+    the filters keep the clips."""
+    have = {same_text(v) for v in found if v is not None}
+    missing = sorted(m for m in set(asked or ()) if same_text(m) not in have)
     if missing:
         where = "the data" if data is None else str(data)
         values = list(held()) if held is not None else []
-        unknown = [m for m in missing if m not in values]
+        unknown = [m for m in missing if not spelt_among(m, values)]
         if values and not unknown:  # there, but the other filters leave them out
             listed = ", ".join(repr(m) for m in missing)
             raise ConfigError(f"no clip {what} {listed} in {where} passes the other filters", flag)
@@ -181,8 +184,8 @@ def check_each_found(asked: Sequence[Asked], data: str | Path | None = None) -> 
     leaves out."""
     checks = [(list(found), values, flag, what, held) for found, values, flag, what, held in asked]
     for found, values, flag, what, held in checks:
-        have = {str(v) for v in found if v is not None}
-        if values and set(values) - have:
+        have = {same_text(v) for v in found if v is not None}
+        if values and any(same_text(v) not in have for v in values):
             data_has = list(held())
             check_found(data_has, values, flag, what, data, data_has.copy)
     for found, values, flag, what, held in checks:

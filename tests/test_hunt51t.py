@@ -5,6 +5,11 @@
   after it, its number lost, taken for frame 3's); a UI-PRMD file's number that is not finite
   said "contains non-finite numbers" with no line; a row of the wrong width or a word in a
   UI-PRMD file was numbered after blank lines were skipped.
+- A label in other Unicode characters than the case base's or the data's ("Plié" typed, é one
+  character, and "Plié" from a macOS file name, e and a combining accent) is that label
+  everywhere (the rule of ``features.text.spelt_as``): ``train --append`` made it a second
+  activity printed the same ("added as new: Plié"), and ``--labels`` typed so kept no clip
+  and was refused naming labels that looked the same ("its labels are Plié").
 - A recording joined from repetitions (``features.joining.join_repetitions``) is made from
   all of them: its source was the first repetition's file, so two recordings that begin
   with the same repetition were one recording to the case base's held-out checks.
@@ -104,3 +109,61 @@ def test_recordings_joined_from_the_same_first_repetition_are_two_recordings() -
     basis, groups = held_out_basis(clf.case_base_)
     assert basis == "recording"
     assert len(set(groups.tolist())) == 3
+
+
+PLIE_TYPED = "Pli\u00e9"  # é one character (NFC), as typed
+PLIE_FILE_NAME = "Plie\u0301"  # e and a combining acute accent (NFD), as macOS names files
+
+
+@pytest.fixture
+def plie_clips(tmp_path: Path) -> tuple[Path, dict[str, Path]]:
+    """Squats as pose files: deep ones are the activity Plié, spelt as a macOS file name
+    gives it, shallow ones squat; and a labels CSV of them."""
+    from features.poses import save_pose
+    from tests.bodies import squat_clip
+
+    files = {}
+    for name, depth in (("a", 0.9), ("b", 0.4), ("c", 0.85), ("d", 0.45)):
+        files[name] = tmp_path / f"{name}.npz"
+        save_pose(squat_clip(depth, 30, source=name), files[name])
+    csv = tmp_path / "labels.csv"
+    rows = (("a", PLIE_FILE_NAME), ("b", "squat"), ("c", PLIE_FILE_NAME), ("d", "squat"))
+    csv.write_text("path,label\n" + "".join(f"{n}.npz,{lab}\n" for n, lab in rows), "utf-8")
+    return csv, files
+
+
+def test_append_in_other_unicode_characters_adds_to_the_stored_activity(
+    tmp_path: Path, plie_clips: tuple[Path, dict[str, Path]]
+) -> None:
+    from casebase_store import open_store
+    from cbr.estimator import CaseBaseClassifier
+    from cbr.training import append, train
+    from features.poses import load_pose
+
+    _, files = plie_clips
+    db = tmp_path / "cb.sqlite"
+    seqs = {n: load_pose(f) for n, f in files.items()}
+    labels = [PLIE_FILE_NAME, "squat", "squat"]
+    train(db, "default", [seqs["a"], seqs["b"], seqs["d"]], labels, CaseBaseClassifier(k=1))
+    result = append(db, "default", [seqs["c"]], [PLIE_TYPED])
+    assert result.new_labels == []  # was ["Plié"]: a second activity
+    store = open_store(db, create=False)
+    try:
+        counts = store.get_case_base("default").label_counts
+    finally:
+        store.close()
+    assert counts == {PLIE_FILE_NAME: 2, "squat": 2}
+
+
+def test_labels_typed_in_other_unicode_characters_keep_the_datas_clips(
+    plie_clips: tuple[Path, dict[str, Path]],
+) -> None:
+    from features.datasets import load_dataset
+    from posecbr.arguments import check_found
+
+    csv, files = plie_clips
+    clips = load_dataset(csv, labels=[PLIE_TYPED])
+    assert sorted(c.seq.source for c in clips) == [str(files["a"]), str(files["c"])]
+    assert {c.label for c in clips} == {PLIE_FILE_NAME}  # the data's own spelling kept
+    # found: not refused as "no clip labelled 'Plié' ...: its labels are Plié and squat"
+    check_found([c.label for c in clips], [PLIE_TYPED], "--labels", "labelled", csv)

@@ -19,7 +19,7 @@ from cbr.similarity import available_measures, get_measure
 from features.cluster import SCHEDULER_HELP, check_scheduler
 from features.errors import ConfigError, DataError, PosecbrError
 from features.fileio import check_output
-from features.text import counted, first_few, percent, shown
+from features.text import counted, first_few, percent, shown, spelt_among
 from posecbr.arguments import (
     DB,
     NAME,
@@ -376,7 +376,7 @@ def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     seq = load_recording(args.data, args.asf, args.fps)
     stretches = recording_clips(seq, track, subject_of(seq))
-    clips = [c for c in stretches if not activities or c.label in activities]
+    clips = [c for c in stretches if not activities or spelt_among(c.label, activities)]
     return _long_enough(args, clips)
 
 
