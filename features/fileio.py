@@ -199,6 +199,36 @@ def atomic_path(
         _UNFINISHED.discard(tmp)
 
 
+WRITE_PROBE = 1 << 16
+"""How many bytes :func:`write_failure` writes: more than FFmpeg writes at once (its 32-KiB
+buffer), so that the room left in the last block of a full disk does not hold them."""
+
+
+def write_failure(path: Path) -> int | None:
+    """The error (errno) writing :data:`WRITE_PROBE` more bytes at the end of ``path``, a file
+    a writer that only warns when a write fails (OpenCV's video writer) did not write whole, a
+    temporary removed after, gives: ENOSPC where the disk is full, EFBIG past a file size
+    limit; None where they are written (it failed for another reason)."""
+    try:
+        with open(path, "ab") as fh:
+            fh.write(bytes(WRITE_PROBE))
+    except OSError as exc:
+        return exc.errno
+    return None
+
+
+def cannot_write(code: int | None, seen: str) -> str:
+    """Why a file was not written, from the error (errno, :func:`write_failure`; None: not
+    known) and what was ``seen`` of the failure: the disk full (as the case base store says
+    it), a file size limit, else ``seen`` alone."""
+    if code in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)):
+        quota = "" if code == errno.ENOSPC else " (its quota used up)"
+        return f"cannot write: the disk is full{quota} ({seen}): free some space and run again"
+    if code == errno.EFBIG:
+        return f"cannot write: the file would grow past a size limit such as `ulimit -f` ({seen})"
+    return f"cannot write: {seen}"
+
+
 # the temporaries of atomic_path and write_together being written in this process
 _UNFINISHED: set[Path] = set()
 

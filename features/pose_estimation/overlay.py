@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import atomic_path
+from features.fileio import atomic_path, cannot_write, write_failure
 
 from .video import iter_frames
 
@@ -571,11 +571,15 @@ def _draw_row(bgr: np.ndarray, landmarks: np.ndarray, words: Sequence[str], gap:
 def check_encoded(path: Path, frames: int, out: Path) -> None:
     """Refuse a video file that does not read back with ``frames`` frames: OpenCV's writer only
     warns when a write fails (a full disk, a file size limit), so the file is checked before it
-    is renamed into place. ``out`` names the output in the message."""
+    is renamed into place. ``out`` names the output in the message, which says why the writes
+    failed where writing more to the file fails too (:func:`features.fileio.cannot_write`):
+    the disk full, as the case base store says it, or a file size limit."""
     cap = cv2.VideoCapture(str(path))
     try:
         found = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
     finally:
         cap.release()
-    if found != frames:
-        raise DataError(f"cannot write: {frames} frames encoded but {found} read back", out)
+    if found == frames:
+        return
+    counts = f"{frames} frames encoded but {found} read back"
+    raise DataError(cannot_write(write_failure(path), counts), out)

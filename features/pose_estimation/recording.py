@@ -26,6 +26,7 @@ import cv2
 import numpy as np
 
 from ..errors import DataError
+from ..fileio import cannot_write, write_failure
 
 #: The encoder: OpenCV's FFmpeg MPEG-4 Part 2, the cheapest to run of those OpenCV writes
 #: (3.8-4.6 ms of CPU a 1280x720 frame; MJPEG 7.1 ms, MPEG-1 9.2 ms, FFV1 38 ms) and
@@ -156,8 +157,9 @@ class Recording:
         params = [cv2.VIDEOWRITER_PROP_RAW_VIDEO, 1, cv2.VIDEOWRITER_PROP_KEY_INTERVAL, 1 << 30]
         out = cv2.VideoWriter(str(mp4), cv2.CAP_FFMPEG, FOURCC, self.fps, self.size, params)
         try:
-            if not cap.isOpened() or not out.isOpened():
-                raise DataError("cannot write: the video could not be copied to MP4", self.what)
+            if not cap.isOpened() or not out.isOpened():  # a full disk cut the NUT file short
+                seen = "the video could not be copied to MP4"
+                raise DataError(cannot_write(write_failure(self.path), seen), self.what)
             ok, header = cap.retrieve(None, int(cap.get(cv2.CAP_PROP_CODEC_EXTRADATA_INDEX)))
             first = header.reshape(-1) if ok and header is not None else np.empty(0, np.uint8)
             while True:
