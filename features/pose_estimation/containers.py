@@ -12,6 +12,7 @@ import math
 import struct
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -53,17 +54,28 @@ def picture_orientation(source: Path | Any, head: bytes | None = None) -> int:
     return value if isinstance(value, int) and 1 <= value <= 8 else 1
 
 
+HeifTurn = tuple[str, tuple[int, ...]]
+"""One of the transformative properties of a HEIF picture (ISO/IEC 23008-12), as
+:func:`heif_shown` applies it: ("irot", (n,)), n quarter turns counter-clockwise; ("imir",
+(axis,)), 0 upside down, 1 left to right; ("clap", (top, left, bottom, right)), the clean
+aperture: the rows and columns kept (the bottom and right ones excluded)."""
+
+
 @dataclass(frozen=True)
 class HeifPicture:
     """A HEIF file's primary picture (its pitm item), as a viewer shows it: its brand
-    (:func:`features.fileio.heif_brand`), width and height (px, its ispe property, turned by
-    its irot) and how many coded pictures it is made of (a grid's tiles: a phone's photo is
-    512x512 tiles put together; 1 for a picture coded whole)."""
+    (:func:`features.fileio.heif_brand`), width and height (px: its ispe property's, turned
+    and cropped by its ``turns``), how many coded pictures it is made of (a grid's tiles: a
+    phone's photo is 512x512 tiles put together; 1 for a picture coded whole), its
+    transformative properties in the order its ipma box lists them (:data:`HeifTurn`,
+    :func:`heif_shown`) and its size as coded (its ispe property's width and height)."""
 
     brand: str
     width: int
     height: int
     tiles: int
+    turns: tuple[HeifTurn, ...] = ()
+    coded: tuple[int, int] = (0, 0)
 
 
 HEIF_META_LIMIT = 16 << 20
@@ -89,16 +101,90 @@ def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
     body, _ = boxes[b"pitm"]
     wide = meta[body] >= 1  # version 1: 32-bit item IDs
     primary = int.from_bytes(meta[body + 4 : body + (8 if wide else 6)], "big")
-    props = _heif_properties(meta, *boxes[b"iprp"], primary)
-    ispe = props.get(b"ispe")
+    listed = _heif_property_list(meta, *boxes[b"iprp"], primary)
+    ispe = dict(listed).get(b"ispe")
     if ispe is None or len(ispe) < 12:
         return None
-    width, height = int.from_bytes(ispe[4:8], "big"), int.from_bytes(ispe[8:12], "big")
-    irot = props.get(b"irot", b"")
-    if irot and irot[0] & 1:  # a quarter turn, one way or the other
-        width, height = height, width
+    coded = int.from_bytes(ispe[4:8], "big"), int.from_bytes(ispe[8:12], "big")
+    turns, width, height = _heif_turns(listed, *coded)
     tiles = len(_heif_derived_from(meta, boxes.get(b"iref"), primary)) or 1
-    return HeifPicture(brand, width, height, tiles)
+    return HeifPicture(brand, width, height, tiles, turns, coded)
+
+
+def _heif_turns(
+    listed: list[tuple[bytes, bytes]], width: int, height: int
+) -> tuple[tuple[HeifTurn, ...], int, int]:
+    """The transformative properties among a picture's ``listed`` properties (name, body, in
+    its ipma box's order), each as :func:`heif_shown` applies it to a picture of ``width`` x
+    ``height`` px as coded, and the picture's width and height then. A clean aperture's
+    window as libheif reckons it: centred at the picture's centre plus its offsets
+    (fractions), its left edge rounded down, its top edge to the nearest (:func:`_c_round`),
+    its width and height kept, cut to the picture; one that keeps nothing or cannot be read
+    is left out (libheif refuses the file: the picture uncropped is posed)."""
+    turns: list[HeifTurn] = []
+    for name, body in listed:
+        if name == b"irot" and body:
+            turns.append(("irot", (body[0] & 3,)))
+            if body[0] & 1:  # a quarter turn, one way or the other
+                width, height = height, width
+        elif name == b"imir" and body:
+            turns.append(("imir", (body[0] & 1,)))
+        elif name == b"clap":
+            window = _clean_aperture(body, width, height)
+            if window is None:
+                continue
+            turns.append(("clap", window))
+            top, left, bottom, right = window
+            width, height = right - left, bottom - top
+    return tuple(turns), width, height
+
+
+def _clean_aperture(body: bytes, width: int, height: int) -> tuple[int, int, int, int] | None:
+    """The rows and columns (top, left, bottom, right; the last two excluded) a clap box's
+    ``body`` keeps of a ``width`` x ``height`` picture (:func:`_heif_turns`); None when it
+    keeps none or a fraction has no denominator."""
+    if len(body) < 32:
+        return None
+    wide_n, wide_d, high_n, high_d = struct.unpack(">IIII", body[:16])
+    x_n, x_d, y_n, y_d = struct.unpack(">iIiI", body[16:32])
+    if not (wide_d and high_d and x_d and y_d):
+        return None
+    edges = []
+    for size, (n, d), (off_n, off_d), nearest in (
+        (width, (wide_n, wide_d), (x_n, x_d), False),
+        (height, (high_n, high_d), (y_n, y_d), True),
+    ):
+        kept = Fraction(n, d)
+        first = Fraction(off_n, off_d) + Fraction(size - 1, 2) - (kept - 1) / 2
+        start = _c_round(first) if nearest else int(first)  # int: toward zero, as C divides
+        last = _c_round(kept - 1 + start)
+        start, last = max(start, 0), min(last, size - 1)
+        if start > last:
+            return None
+        edges.append((start, last + 1))
+    (left, right), (top, bottom) = edges
+    return top, left, bottom, right
+
+
+def _c_round(value: Fraction) -> int:
+    """``value`` rounded as libheif rounds a fraction: half its denominator added to its
+    numerator, then divided as C divides (toward zero)."""
+    return int(Fraction(value.numerator + value.denominator // 2, value.denominator))
+
+
+def heif_shown(image: np.ndarray, turns: Sequence[HeifTurn]) -> np.ndarray:
+    """``image``, a HEIF picture as coded (a grid's put together), as a viewer shows it: its
+    transformative properties ``turns`` (:data:`HeifTurn`) applied in order, as libheif
+    applies them (ISO/IEC 23008-12 lists them in that order). A view where it can be."""
+    for name, values in turns:
+        if name == "irot":
+            image = np.rot90(image, values[0])
+        elif name == "imir":
+            image = image[::-1] if values[0] == 0 else image[:, ::-1]
+        else:
+            top, left, bottom, right = values
+            image = image[top:bottom, left:right]
+    return image
 
 
 @dataclass(frozen=True)
@@ -108,9 +194,8 @@ class HeifGrid:
     as one stream FFmpeg reads (``codec`` "hevc": an Annex B stream, each tile its parameter
     sets and its picture; "av1": an IVF file, each tile a frame), ``rows`` x ``columns``
     tiles of ``tile_width`` x ``tile_height`` px in rows from the top left, the picture the
-    top-left ``width`` x ``height`` px of them, then turned as its ``turns`` say, in order:
-    ("irot", n), n quarter turns counter-clockwise; ("imir", axis), 0 upside down, 1 left to
-    right (ISO/IEC 23008-12)."""
+    top-left ``width`` x ``height`` px of them, then turned and cropped as its ``turns`` say,
+    in order (:data:`HeifTurn`, :func:`heif_shown`)."""
 
     codec: str
     stream: bytes
@@ -120,7 +205,7 @@ class HeifGrid:
     tile_height: int
     width: int
     height: int
-    turns: tuple[tuple[str, int], ...]
+    turns: tuple[HeifTurn, ...]
 
 
 HEIF_TILE_CODECS = {b"hvc1": "hevc", b"hev1": "hevc", b"av01": "av1"}
@@ -169,12 +254,7 @@ def heif_grid(fh: Any, size: int, head: bytes) -> HeifGrid | None:
     )
     if stream is None:
         return None
-    shown = _heif_properties(meta, *boxes[b"iprp"], primary)
-    turns = tuple(
-        (name.decode(), shown[name][0] & (3 if name == b"irot" else 1))
-        for name in shown
-        if name in (b"irot", b"imir") and shown[name]
-    )
+    turns, _, _ = _heif_turns(_heif_property_list(meta, *boxes[b"iprp"], primary), width, height)
     return HeifGrid(codec, stream, rows, columns, tile_width, tile_height, width, height, turns)
 
 
@@ -360,12 +440,19 @@ def _top_box(
 
 def _heif_properties(meta: bytes, start: int, end: int, item: int) -> dict[bytes, bytes]:
     """The properties (name: body) the ipma box in a HEIF meta's iprp box (``meta[start:end]``)
-    associates with ``item``, from its ipco box (numbered from 1)."""
+    associates with ``item`` (:func:`_heif_property_list`)."""
+    return dict(_heif_property_list(meta, start, end, item))
+
+
+def _heif_property_list(meta: bytes, start: int, end: int, item: int) -> list[tuple[bytes, bytes]]:
+    """The properties (name, body) the ipma box in a HEIF meta's iprp box (``meta[start:end]``)
+    associates with ``item``, from its ipco box (numbered from 1), in the order it lists
+    them (the order transformative properties apply in)."""
     ipco, ipma = _mp4_child(meta, start, end, (b"ipco",)), _mp4_child(meta, start, end, (b"ipma",))
     listed = [(kind, meta[body:stop]) for kind, body, stop in _mp4_boxes(meta, *ipco)]
     at, stop = ipma
     if stop - at < 8:
-        return {}
+        return []
     version, flags = meta[at], meta[at + 3]
     id_bytes, index_bytes = (4 if version >= 1 else 2), (2 if flags & 1 else 1)
     count, at = int.from_bytes(meta[at + 4 : at + 8], "big"), at + 8
@@ -381,8 +468,8 @@ def _heif_properties(meta: bytes, start: int, end: int, item: int) -> dict[bytes
         ]
         at += n * index_bytes
         if owner == item:
-            return {listed[i - 1][0]: listed[i - 1][1] for i in indexes if 0 < i <= len(listed)}
-    return {}
+            return [listed[i - 1] for i in indexes if 0 < i <= len(listed)]
+    return []
 
 
 def _heif_derived_from(meta: bytes, iref: tuple[int, int] | None, item: int) -> list[int]:

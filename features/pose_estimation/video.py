@@ -63,6 +63,7 @@ from .containers import (  # noqa: E402
     counted_by_duration,
     heif_grid,
     heif_picture,
+    heif_shown,
     is_mp4,
     mp4_empty_video,
     mp4_timeless_frames,
@@ -330,8 +331,9 @@ def _seen_size(cap: cv2.VideoCapture, path: Path, head: bytes) -> tuple[Capture,
     OpenCV's own turning set off; one turned a quarter is as wide as it is stored high. An
     MP4/MOV whose first video track is a lesser one is refused
     (:func:`_refuse_lesser_track`). A HEIF photo of which OpenCV decodes a part, one tile of
-    a phone's photo, is read whole (its tiles put together and turned: :func:`_whole_part`,
-    turned 1 then), or refused where it cannot be."""
+    a phone's photo, or that its properties turn otherwise than OpenCV does (an imir, a
+    clap), is read whole (its tiles put together, turned, mirrored and cropped:
+    :func:`_whole_part`, turned 1 then), or refused where it cannot be."""
     orientation = picture_orientation(path)
     if is_mp4(head) and heif_brand(head) is None:
         orientation = _tracks_turn(cap, path, _video_tracks(cap, path), orientation)
@@ -385,22 +387,33 @@ def _video_tracks(cap: cv2.VideoCapture, path: Path) -> list[VideoTrack]:
 
 def _whole_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, height: int) -> Capture:
     """``cap`` of a HEIF photo (HEIC, AVIF: :func:`.containers.heif_picture`) of which
-    OpenCV decodes a ``width`` x ``height`` frame that is its primary picture; else, where
-    that picture is a grid of tiles (a phone's photo, 512x512 tiles put together: FFmpeg
-    gives each coded picture in the file as a stream of its own and OpenCV reads the first,
-    the top-left tile alone), the picture put together from its tiles
-    (:func:`_whole_picture`, ``cap`` released); any other such photo is refused."""
+    OpenCV decodes a ``width`` x ``height`` frame that is its primary picture as shown
+    (:func:`_as_decoded`), or whose picture cannot be read (OpenCV's verdict stands); else
+    the picture read whole (:func:`_whole_picture`, ``cap`` released): put together from its
+    tiles where it is a grid (a phone's photo, 512x512 tiles put together: FFmpeg gives each
+    coded picture in the file as a stream of its own and OpenCV reads the first, the
+    top-left tile alone), turned, mirrored and cropped as its properties say; any other such
+    photo is refused."""
     try:
         with open(path, "rb") as fh:
             size = path.stat().st_size
             picture = heif_picture(fh, size, head)
-            if picture is None or (picture.width, picture.height) == (width, height):
+            if picture is None or _as_decoded(picture, width, height):
                 return cap
             grid = heif_grid(fh, size, head)
     except OSError as exc:
         cap.release()
         raise DataError(f"cannot read ({exc.strerror or exc})", path) from None
     return _whole_picture(cap, path, picture, grid, (width, height))
+
+
+def _as_decoded(picture: HeifPicture, width: int, height: int) -> bool:
+    """Whether OpenCV's frame of ``width`` x ``height`` of a HEIF file is its primary
+    ``picture`` as shown: it is as large and turned by an irot alone, which OpenCV applies
+    (FFmpeg gives it as a display matrix), or not at all. An imir it reads as a turn (axis 0
+    none, 1 a half turn) and a clap it does not apply."""
+    turned = all(name == "irot" for name, _ in picture.turns)
+    return turned and (picture.width, picture.height) == (width, height)
 
 
 def _whole_picture(
@@ -411,25 +424,58 @@ def _whole_picture(
     decoded: tuple[int, int],
 ) -> StillCapture:
     """The HEIF photo ``picture`` (opened from ``source``), of which OpenCV decodes a frame of
-    ``decoded`` (width, height) that is not it, put together from the tiles of its ``grid``
-    (:func:`.containers.heif_grid`: each decoded by FFmpeg, in one stream), as one frame
-    (:class:`StillCapture`, at the rate OpenCV states for it); ``cap`` released. Refused when
-    it is no grid of tiles FFmpeg decodes, as it was before: a part of it was posed."""
+    ``decoded`` (width, height) that is not it as shown, read whole as one frame
+    (:class:`StillCapture`, at the rate OpenCV states for it; ``cap`` released): put
+    together from the tiles of its ``grid`` (:func:`.containers.heif_grid`: each decoded by
+    FFmpeg, in one stream), or, coded whole, the frame OpenCV decodes as stored (its own
+    turning set off), then turned, mirrored and cropped as its properties say, in their
+    order (:func:`.containers.heif_shown`). Refused when it is no grid of tiles FFmpeg
+    decodes nor coded whole as OpenCV decodes it, as it was before: a part of it was
+    posed."""
     fps, fourcc = cap.get(cv2.CAP_PROP_FPS), cap.get(cv2.CAP_PROP_FOURCC)
+    stored = _stored_frame(cap, picture.coded) if grid is None and picture.tiles == 1 else None
     cap.release()
     whole = f"{_a(picture.brand)} picture of {picture.width}x{picture.height}"
-    if grid is None:
-        if picture.tiles > 1:
-            what = (
-                f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
-                f" OpenCV decodes one alone ({decoded[0]}x{decoded[1]})"
-            )
-        else:
-            what = (
-                f"{whole} of which OpenCV decodes another picture in the file"
-                f" ({decoded[0]}x{decoded[1]})"
-            )
-        raise DataError(f"{what}: convert it to JPEG or PNG first", source)
+    if grid is not None:
+        bgr = heif_shown(_grid_picture(grid, source, whole), grid.turns)
+    elif stored is not None:
+        bgr = heif_shown(stored, picture.turns)
+    elif picture.tiles > 1:
+        raise DataError(
+            f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
+            f" OpenCV decodes one alone ({decoded[0]}x{decoded[1]}): convert it to JPEG or PNG"
+            " first",
+            source,
+        )
+    else:
+        raise DataError(
+            f"{whole} of which OpenCV decodes another picture in the file"
+            f" ({decoded[0]}x{decoded[1]}): convert it to JPEG or PNG first",
+            source,
+        )
+    if bgr.shape[:2] != (picture.height, picture.width):
+        raise DataError(
+            f"{whole} whose tiles make a picture of {bgr.shape[1]}x{bgr.shape[0]}: convert it"
+            " to JPEG or PNG first",
+            source,
+        )
+    return StillCapture(np.ascontiguousarray(bgr), float(fps or 1.0), float(fourcc or 0.0))
+
+
+def _stored_frame(cap: cv2.VideoCapture, coded: tuple[int, int]) -> np.ndarray | None:
+    """The frame ``cap`` of a HEIF picture coded whole decodes, as stored (OpenCV's own
+    turning set off), when it is of the picture's ``coded`` size (width, height); None
+    otherwise (another picture in the file, or none decoded)."""
+    cap.set(cv2.CAP_PROP_ORIENTATION_AUTO, 0)
+    ok, bgr = cap.read()
+    if not ok or bgr is None or bgr.shape[:2] != (coded[1], coded[0]):
+        return None
+    return np.asarray(bgr)
+
+
+def _grid_picture(grid: HeifGrid, source: str | Path, whole: str) -> np.ndarray:
+    """The tiles of ``grid`` (:func:`_decoded_tiles`) put together and cut to its width and
+    height; refused when FFmpeg decodes fewer than all (``whole``: the picture, in words)."""
     tiles = _decoded_tiles(grid, source)
     rows, columns, high, wide = grid.rows, grid.columns, grid.tile_height, grid.tile_width
     if len(tiles) < rows * columns:
@@ -438,24 +484,12 @@ def _whole_picture(
             f" FFmpeg decodes {len(tiles)}: convert it to JPEG or PNG first",
             source,
         )
-    bgr = (
+    return (
         np.stack(tiles)
         .reshape(rows, columns, high, wide, 3)
         .swapaxes(1, 2)
         .reshape(rows * high, columns * wide, 3)[: grid.height, : grid.width]
     )
-    for name, n in grid.turns:
-        if name == "irot":
-            bgr = np.rot90(bgr, n)
-        else:
-            bgr = bgr[::-1] if n == 0 else bgr[:, ::-1]
-    if bgr.shape[:2] != (picture.height, picture.width):
-        raise DataError(
-            f"{whole} whose tiles make a picture of {bgr.shape[1]}x{bgr.shape[0]}: convert it"
-            " to JPEG or PNG first",
-            source,
-        )
-    return StillCapture(np.ascontiguousarray(bgr), float(fps or 1.0), float(fourcc or 0.0))
 
 
 def _decoded_tiles(grid: HeifGrid, source: str | Path) -> list[np.ndarray]:
@@ -1584,7 +1618,7 @@ def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> tu
         return cap, 1
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    if picture is None or (picture.width, picture.height) == (width, height):
+    if picture is None or _as_decoded(picture, width, height):
         return cap, 1
     try:
         grid = heif_grid(served, served.length, head)
