@@ -368,7 +368,8 @@ def _grid_layout(data: bytes) -> tuple[int, int, int, int] | None:
     n = 4 if data[1] & 1 else 2
     if len(data) < 4 + 2 * n:
         return None
-    width, height = int.from_bytes(data[4 : 4 + n], "big"), int.from_bytes(data[4 + n :], "big")
+    width = int.from_bytes(data[4 : 4 + n], "big")
+    height = int.from_bytes(data[4 + n : 4 + 2 * n], "big")  # not the bytes after it
     return data[2] + 1, data[3] + 1, width, height
 
 
