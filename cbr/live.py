@@ -1568,13 +1568,22 @@ class LiveSegmenter:
     def current(self) -> LiveSegment | None:
         """The segment in progress, labelled with the rolling label; its confidence and
         repetitions as of the last hop (counted once a hop, not on every frame drawn: a
-        count over up to :data:`MAX_SEGMENT_S` of frames takes longer than a frame lasts)."""
+        count over up to :data:`MAX_SEGMENT_S` of frames takes longer than a frame lasts).
+        Asking changes nothing the segments given count by: where a repetition the person was
+        lost from view in began (:attr:`lost_from`) is left to the segment when it finishes
+        (before, asked for on every frame ``watch --out`` or ``--show`` draws, it cleared
+        that, and the segment seen again after the stretch with nobody in view counted the
+        repetition no more)."""
         if self.state is None:
             return None
         state = self.unknown if self.label is None else int(self.state)
         key = (self.hops, self.seen_start, state)
         if self.shown is None or self.shown[0] != key:
-            self.shown = (key, self._segment(self.seen_start, self.n, state, False, False))
+            lost_from = self.lost_from
+            try:
+                self.shown = (key, self._segment(self.seen_start, self.n, state, False, False))
+            finally:
+                self.lost_from = lost_from
         return dataclasses.replace(self.shown[1], end_frame=self.n)
 
     def finish(self) -> list[LiveSegment]:

@@ -1,9 +1,52 @@
-"""Hunt 51r: a review of the session's changes. A HEIF grid whose layout item holds bytes
-after its fields was read as a picture millions of pixels high."""
+"""Hunt 51r: a review of the session's changes. ``watch`` counted a squat the person was lost
+from view in at its bottom and seen again on the way up as it counts with no frame drawn only
+when it drew no frame (the segment in progress, drawn with its count, forgot where the
+repetition began); a HEIF grid whose layout item holds a byte more than its fields was read
+as a picture millions of pixels high."""
 
 from __future__ import annotations
 
+import numpy as np
+
+from cbr.estimator import CaseBaseClassifier
+from cbr.live import LiveSegmenter
 from features.pose_estimation.containers import _grid_layout
+from features.poses import PoseSequence
+from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
+
+
+def _drawn(clf: CaseBaseClassifier, positions: np.ndarray) -> list:
+    """The segments ``watch``'s live segmenter gives the frames pushed one by one at 30 fps,
+    the segment in progress asked for after every frame, as ``watch`` asks it for every frame
+    it draws (``--out``, ``--show``)."""
+    live = LiveSegmenter(clf, 30.0)
+    out = []
+    for frame in positions:
+        out += live.push(frame)
+        live.current()
+    return out + live.finish()
+
+
+def test_watch_counts_a_squat_lost_at_its_bottom_alike_whether_it_draws_or_not(
+    recordings: dict[str, PoseSequence],  # noqa: F811 - the fixture imported above
+    classifier: CaseBaseClassifier,  # noqa: F811
+) -> None:
+    """CMU 13_30's squats (11.8-16.1 s, two squats: the hips lowest at frames 36-39 and
+    105-108 of 30 fps) cut at frame 40, just after the first squat's bottom, 1 s with every
+    joint missing, the rest, and the two squats again. By hand: 4 squats, the first lost from
+    view on its way up and seen again (one repetition, as ``segment`` counts it). Drawn, the
+    segment after the stretch counted 3: the segment in progress, asked for to be drawn with
+    its count, took and cleared the frame the lost squat began at (LiveSegmenter.lost_from)."""
+    rec = recordings["13_30"]
+    squats = rec.positions[int(11.8 * 120) : int(16.1 * 120)][::4]
+    nobody = np.full((30, *squats.shape[1:]), np.nan)
+    positions = np.concatenate([squats[:40], nobody, squats[40:], squats])
+    drawn = _drawn(classifier, positions)
+    assert [(s.start_frame, s.label, s.repetitions) for s in drawn] == [
+        (0, "Squat", 0),  # down to the bottom: the repetition goes on out of sight
+        (40, None, 0),  # nobody in view
+        (70, "Squat", 4),  # seen again: the lost squat, and three more
+    ]
 
 
 def test_a_heif_grid_layout_is_read_from_its_fields_alone() -> None:
