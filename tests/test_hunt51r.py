@@ -1,17 +1,27 @@
-"""Hunt 51r: a review of the session's changes. ``watch`` counted a squat the person was lost
-from view in at its bottom and seen again on the way up as it counts with no frame drawn only
-when it drew no frame (the segment in progress, drawn with its count, forgot where the
-repetition began); a HEIF grid whose layout item holds a byte more than its fields was read
-as a picture millions of pixels high."""
+"""Hunt 51r: a review of the session's changes. ``watch --out`` (or ``--show``) counted a
+squat the person was lost from view in at its bottom and seen again on the way up no more,
+where ``watch`` without them counted it (the segment in progress, drawn with its count,
+cleared where the repetition began); ``watch`` left the latency of a frame held after a
+pause uncounted when the frame after it was held too; a HEIF grid whose layout item holds
+bytes after its fields was read as a picture millions of pixels high."""
 
 from __future__ import annotations
 
+import argparse
+import threading
+from types import SimpleNamespace
+
 import numpy as np
+import pytest
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
+from features.errors import DataError
 from features.pose_estimation.containers import _grid_layout
 from features.poses import PoseSequence
+from posecbr.commands.watch import Regrid, Watcher
+from tests.test_hunt49e import _frame
+from tests.test_hunt51e import _Segmenter
 from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
 
 
@@ -47,6 +57,31 @@ def test_watch_counts_a_squat_lost_at_its_bottom_alike_whether_it_draws_or_not(
         (40, None, 0),  # nobody in view
         (70, "Squat", 4),  # seen again: the lost squat, and three more
     ]
+
+
+def test_each_frame_held_after_a_pause_has_its_latency_counted() -> None:
+    """A live stream at 30 fps for 2 s, then five frames each 0.3 s after the one before (a
+    drop-out before each: each held until the next frame tells it from a burst's), then 30
+    fps again for 1 s: 95 frames, each watched and each with its latency counted once. The
+    first four of the five were held, then given with the next, itself held: their
+    latencies were not counted (91 of 95), and those are the frames that waited longest."""
+    times = [*(np.arange(60) / 30.0)]
+    times += [times[-1] + 0.3 * k for k in range(1, 6)]
+    times += [times[-1] + k / 30.0 for k in range(1, 31)]
+    frames = []
+    for i, t in enumerate(times):
+        frame = _frame(i, float(t))
+        frame.read_at, frame.last = 0.0, False  # latencies counted from the clock's start
+        frames.append(frame)
+    args = argparse.Namespace(source="0", max_frames=None, out=None, show=False)
+    watcher = Watcher(None, None, args, 30.0)
+    watcher.live, watcher._grid = _Segmenter(), Regrid(30.0, "0")
+    latencies: list[float] = []
+    watcher.latency = SimpleNamespace(add=latencies.append)  # type: ignore[assignment]
+    with pytest.raises(DataError, match="the stream ended after"):
+        watcher.follow(iter(frames), False, threading.Event())
+    assert len(times) == 95
+    assert len(latencies) == 95
 
 
 def test_a_heif_grid_layout_is_read_from_its_fields_alone() -> None:

@@ -818,13 +818,13 @@ class Watcher:
             self.spent = None
         since = self._since(frame)
         if since == since and not self.replaying:  # not NaN: the source said when it read it
+            now = time.perf_counter()
+            if self.held_since == self.held_since:  # the frame held before, given now
+                self.latency.add(now - self.held_since)  # (this one held too, or not)
+                self.held_since = math.nan
             if self._grid.held is frame:  # its label comes with the next frame's
                 self.held_since = since
                 return
-            now = time.perf_counter()
-            if self.held_since == self.held_since:  # the frame held before, given now
-                self.latency.add(now - self.held_since)
-            self.held_since = math.nan
             self.latency.add(now - since)
 
     def _push(self, taken: list[tuple[Any, Any, Any]]) -> None:
