@@ -727,10 +727,15 @@ def _unnamed_columns_dropped(rows: list[list[str]], csv_path: Path) -> list[list
     columns a spreadsheet saves after the last one used (``path,label,,`` and ``a.npz,squat,,``:
     Excel writes them once a cell out there has been touched), which were refused as
     "repeated column names", or kept as a column named "". A value in an unnamed column is
-    refused naming its line and column: no name says what it is."""
+    refused naming its line and column: no name says what it is. An unnamed FIRST column is
+    a row index, as pandas' ``to_csv()`` and R's ``write.csv`` save one (``,path,label`` and
+    ``0,a.npz,squat``): dropped with its values, as before it was read as a column ""."""
     unnamed = [i for i, name in enumerate(rows[0]) if not name.strip()]
     if not unnamed or len(unnamed) == len(rows[0]):
         return rows  # no column named at all: the header's own error says so
+    if unnamed[0] == 0:  # a row index
+        rows = [row[1:] for row in rows]
+        return _unnamed_columns_dropped(rows, csv_path) if len(unnamed) > 1 else rows
     for line_no, row in enumerate(rows[1:], start=2):
         filled = next((i for i in unnamed if i < len(row) and row[i].strip()), None)
         if filled is not None:

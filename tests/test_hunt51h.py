@@ -124,6 +124,18 @@ def test_a_labels_csv_with_a_spreadsheets_empty_columns_is_read(tmp_path: Path) 
     assert [r["extras"] for r in read_labels_csv(one)] == [{}]
 
 
+def test_a_labels_csv_saved_with_its_row_index_is_read(tmp_path: Path) -> None:
+    """pandas' to_csv() (and R's write.csv) saves its row index as a first column without a
+    name: read as before the spreadsheet's empty columns were refused (not refused as 'column 1
+    holds 0')."""
+    path = _csv(tmp_path, "x.csv", ",path,label,subject\n0,a.npz,squat,s1\n1,b.npz,lunge,s2\n")
+    rows = read_labels_csv(path)
+    assert [(r["path"].name, r["label"], r["subject"], r["extras"]) for r in rows] == [
+        ("a.npz", "squat", "s1", {}),
+        ("b.npz", "lunge", "s2", {}),
+    ]
+
+
 @pytest.mark.parametrize(
     ("rows", "said"),
     [
