@@ -1916,6 +1916,59 @@ def _twinned(names: tuple[str, ...]) -> np.ndarray:
     return np.array([_swap(n) in present for n in names])
 
 
+def _taking_turns(reach: np.ndarray, sides: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """Which far points of a movement that alternates sides count, of how far each goes out
+    from the symmetric posture ``reach`` ``(k,)`` and to which side ``sides`` ``(k,)`` (in
+    time order), ``whole`` ``(k,)`` where the line rises to it and falls back from it within
+    the clip (:func:`_candidates`): all but the small ones whose sides take turns without
+    them. Small: reaching less than half as far (the factor of two the two sides' reaches are
+    compared by) as
+
+    - a far point of its own side next to it (no far point of the other side between them):
+      the same excursion going out twice;
+    - or, for two next to each other, one to each side, the far points before and after
+      them: a wobble about the symmetric posture between two repetitions (a side lunge's
+      trailing knee bending a little as the person stands back up, 0.15-0.3 rad each way
+      between lunges of 0.7-1.4 rad).
+
+    A small far point alone between two of the other side stays, as do the first and the
+    last: the sides take turns with it (a jog's fading steps, a third as far as the
+    others). Dropped the smallest first: in each round every one (or pair) that no smaller
+    one within two far points of it would change. A far point cut off at the clip's start or
+    end shows no whole repetition to be measured against: the end of a twist before a jog,
+    three times as far as the steps, leaves its first step whole."""
+    from scipy.ndimage import minimum_filter1d
+
+    beside = np.where(whole, reach, 0.0)  # how far a neighbour goes out, as measured against
+    kept = np.arange(len(reach))
+    while len(kept) >= 2:
+        r, b, s = reach[kept], beside[kept], sides[kept]
+        n = len(kept)
+        same = s[1:] == s[:-1]  # (n - 1,) no turn between a far point and the next
+        single = np.zeros(n, dtype=bool)
+        single[1:] |= same & (r[1:] < 0.5 * b[:-1])
+        single[:-1] |= same & (r[:-1] < 0.5 * b[1:])
+        pair = np.zeros(n, dtype=bool)  # the far point and the next, between the two around
+        top = np.full(n, np.inf)
+        if n >= 4:
+            top[1:-2] = np.maximum(r[1:-2], r[2:-1])
+            pair[1:-2] = ~same[1:-1] & (top[1:-2] < 0.5 * np.minimum(b[:-3], b[3:]))
+        score = np.concatenate([np.where(single, r, np.inf), np.where(pair, top, np.inf)])
+        if not np.isfinite(score).any():
+            break
+        rank = np.empty(2 * n)
+        rank[np.lexsort((np.tile(np.arange(n), 2), score))] = np.arange(2 * n)
+        rank[~np.isfinite(score)] = np.inf
+        first = np.minimum(rank[:n], rank[n:])  # the smallest starting at each far point
+        near = minimum_filter1d(first, size=5, mode="constant", cval=np.inf)
+        go_single = single & (rank[:n] == near)
+        go_pair = pair & (rank[n:] == near)
+        drop = go_single | go_pair
+        drop[1:] |= go_pair[:-1]
+        kept = kept[~drop]
+    return np.asarray(np.isin(np.arange(len(reach)), kept))
+
+
 def _alternating_repetitions(
     x: np.ndarray,
     names: tuple[str, ...],
@@ -2006,6 +2059,9 @@ def _alternating_repetitions(
     reached[reached] = _whole_only(back[reached], edges)
     order = np.argsort(far[reached], kind="stable")
     far, sides = far[reached][order], sides[reached][order]
+    whole = ~(back[reached][order] < MIN_EXCURSION_RAD).any(axis=1)
+    turns = _taking_turns(np.abs(line[far]), sides, whole)
+    far, sides = far[turns], sides[turns]
     moved = _in_view(far, blind)
     once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
     far, sides = moved[once], sides[once]
