@@ -16,9 +16,7 @@ again on the way up is one repetition, counted once), in ``reps``, ``segment`` a
 
 from __future__ import annotations
 
-import argparse
 import re
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -27,18 +25,8 @@ import pytest
 from cbr.estimator import CaseBaseClassifier
 from features.poses import PoseSequence
 from posecbr.cli import build_parser, main
+from tests.test_empty_arguments import _commands
 from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
-
-
-def _commands(
-    parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()
-) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser]]:
-    """Every (sub)command of ``parser`` with the words that name it (``casebase trim``)."""
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                yield (*prefix, name), sub
-                yield from _commands(sub, (*prefix, name))
 
 
 def _asked(usage: str, prog: str) -> set[str]:

@@ -249,21 +249,29 @@ def test_the_last_frame_after_a_pause_is_watched_and_its_latency_counted() -> No
     latency counted once. Before hunt 51e it was placed on grid time 60 (a burst's first
     frame, 0.30 s early)."""
     times = [*(np.arange(60) / 30.0), 59 / 30.0 + 1.0 / 3.0]
-    frames = []
-    for i, t in enumerate(times):
-        frame = _frame(i, float(t))
-        frame.read_at, frame.last = 0.0, False  # latencies counted from the clock's start
-        frames.append(frame)
-    args = argparse.Namespace(source="0", max_frames=None, out=None, show=False)
-    watcher = Watcher(None, None, args, 30.0)
-    watcher.live, watcher._grid = _Segmenter(), Regrid(30.0, "0")
-    latencies: list[float] = []
-    watcher.latency = SimpleNamespace(add=latencies.append)  # type: ignore[assignment]
-    with pytest.raises(DataError, match="the stream ended after 70 frames"):
-        watcher.follow(iter(frames), False, threading.Event())
+    watcher, latencies = _watched(times, "the stream ended after 70 frames")
     poses = np.array(watcher.live.poses)
     assert len(poses) == 70
     assert np.isnan(poses[60:69]).all()
     assert poses[69] == pytest.approx(times[-1])
     np.testing.assert_allclose(poses[:60], times[:60])
     assert len(latencies) == 61
+
+
+def _watched(times: list[float], ended: str) -> tuple[Watcher, list[float]]:
+    """A live 30-fps stream's frames read at ``times`` (s, latencies counted from the clock's
+    start) followed by a watcher with a segmenter that keeps its poses, until the stream ends
+    (the refusal matching ``ended``); the watcher and every latency it counted."""
+    frames = []
+    for i, t in enumerate(times):
+        frame = _frame(i, float(t))
+        frame.read_at, frame.last = 0.0, False
+        frames.append(frame)
+    args = argparse.Namespace(source="0", max_frames=None, out=None, show=False)
+    watcher = Watcher(None, None, args, 30.0)
+    watcher.live, watcher._grid = _Segmenter(), Regrid(30.0, "0")
+    latencies: list[float] = []
+    watcher.latency = SimpleNamespace(add=latencies.append)  # type: ignore[assignment]
+    with pytest.raises(DataError, match=ended):
+        watcher.follow(iter(frames), False, threading.Event())
+    return watcher, latencies

@@ -7,21 +7,13 @@ bytes after its fields was read as a picture millions of pixels high."""
 
 from __future__ import annotations
 
-import argparse
-import threading
-from types import SimpleNamespace
-
 import numpy as np
-import pytest
 
 from cbr.estimator import CaseBaseClassifier
 from cbr.live import LiveSegmenter
-from features.errors import DataError
 from features.pose_estimation.containers import _grid_layout
 from features.poses import PoseSequence
-from posecbr.commands.watch import Regrid, Watcher
-from tests.test_hunt49e import _frame
-from tests.test_hunt51e import _Segmenter
+from tests.test_hunt51e import _watched
 from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
 
 
@@ -68,18 +60,7 @@ def test_each_frame_held_after_a_pause_has_its_latency_counted() -> None:
     times = [*(np.arange(60) / 30.0)]
     times += [times[-1] + 0.3 * k for k in range(1, 6)]
     times += [times[-1] + k / 30.0 for k in range(1, 31)]
-    frames = []
-    for i, t in enumerate(times):
-        frame = _frame(i, float(t))
-        frame.read_at, frame.last = 0.0, False  # latencies counted from the clock's start
-        frames.append(frame)
-    args = argparse.Namespace(source="0", max_frames=None, out=None, show=False)
-    watcher = Watcher(None, None, args, 30.0)
-    watcher.live, watcher._grid = _Segmenter(), Regrid(30.0, "0")
-    latencies: list[float] = []
-    watcher.latency = SimpleNamespace(add=latencies.append)  # type: ignore[assignment]
-    with pytest.raises(DataError, match="the stream ended after"):
-        watcher.follow(iter(frames), False, threading.Event())
+    _, latencies = _watched(times, "the stream ended after")
     assert len(times) == 95
     assert len(latencies) == 95
 
