@@ -17,6 +17,11 @@ class PosecbrError(Exception):
         self.source = str(source) if source is not None else None
         super().__init__(f"{self.source}: {message}" if self.source else message)
 
+    def named(self, source: str | Path) -> None:
+        """Name ``source`` instead (the file a hidden temporary named was written for)."""
+        self.source = str(source)
+        self.args = (f"{self.source}: {self.message}",)
+
     def add(self, more: str) -> None:
         """Say ``more`` after the message (what the command had done before the error)."""
         self.message = f"{self.message}; {more}"

@@ -184,7 +184,7 @@ def atomic_path(
             dest.parent.mkdir(parents=True, exist_ok=True)
         tmp = temporary_file(dest, suffix)
     except OSError as exc:
-        raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
+        raise DataError(write_error(exc), dest) from None
     try:
         _UNFINISHED.add(tmp)
         yield tmp
@@ -193,7 +193,7 @@ def atomic_path(
     except BrokenPipeError:  # standard output's reader has gone: not this file's fault
         raise
     except OSError as exc:
-        raise DataError(f"cannot write: {exc.strerror or exc}", dest) from None
+        raise DataError(write_error(exc), dest) from None
     finally:
         tmp.unlink(missing_ok=True)
         _UNFINISHED.discard(tmp)
@@ -227,6 +227,14 @@ def cannot_write(code: int | None, seen: str) -> str:
     if code == errno.EFBIG:
         return f"cannot write: the file would grow past a size limit such as `ulimit -f` ({seen})"
     return f"cannot write: {seen}"
+
+
+def write_error(exc: OSError) -> str:
+    """Why a file was not written, from ``exc`` raised writing it: the disk full, its quota
+    used up or a file size limit as :func:`cannot_write` says them (as the case base store,
+    overlays and ``watch --out`` say them), another error in its own words. Every writer of
+    the command line says its failures through this."""
+    return cannot_write(exc.errno, exc.strerror or str(exc))
 
 
 # the temporaries of atomic_path and write_together being written in this process
@@ -481,7 +489,7 @@ def replace_together(moves: Sequence[tuple[Path, Path]], before: str = "the earl
         lost = _put_back(done)
         lost_, asides = [d for d, _ in lost], [a for _, a in lost]
         why = _nothing_written(len(moves), earlier, lost_, asides, before)
-        said = f"cannot write: {exc.strerror or exc}; {why}"
+        said = f"{write_error(exc)}; {why}"
         raise DataError(said, dest) from None
     except BaseException:
         _put_back(done)
@@ -545,8 +553,7 @@ def write_together(
                 write(staged[-1][0])
                 os.chmod(staged[-1][0], 0o666 & ~_umask())  # as atomic_path's
             except (OSError, PosecbrError) as exc:
-                why = exc.message if isinstance(exc, PosecbrError) else None
-                why = why or f"cannot write: {getattr(exc, 'strerror', None) or exc}"
+                why = exc.message if isinstance(exc, PosecbrError) else write_error(exc)
                 earlier = [d for d, _ in files if os.path.lexists(d)]
                 said = _nothing_written(len(files), earlier, before=before)
                 raise DataError(f"{why}; {said}", dest) from None
@@ -605,7 +612,9 @@ def staged_folder(folder: str | Path, *, last: Collection[str] = ()) -> Iterator
         # one rename failing puts back those done: the folder's earlier files, not half new
         replace_together([(path, out / path.name) for path in staged])
         stage.rmdir()
-    except BaseException:
+    except BaseException as exc:
+        if isinstance(exc, PosecbrError) and exc.source and Path(exc.source).parent == stage:
+            exc.named(out / Path(exc.source).name)  # the file as it is to be, not as staged
         shutil.rmtree(stage, ignore_errors=True)
         if created:
             shutil.rmtree(out, ignore_errors=True)

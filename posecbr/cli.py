@@ -205,12 +205,14 @@ EPILOG = (
     "turns them off."
 )
 
+#: a write refused for want of room: a full disk, a quota used up, a file size limit
+#: (RLIMIT_FSIZE, `ulimit -f`); said as posecbr's own writers say it
+NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC), errno.EFBIG})
+
 #: errors of the system, not of posecbr: said in one line, exit 1, as a problem with the
 #: input is (a disk full as an output is written, a folder it may not write in)
-SYSTEM_ERRNOS = frozenset(
+SYSTEM_ERRNOS = NO_ROOM_ERRNOS | frozenset(
     {
-        errno.ENOSPC,
-        getattr(errno, "EDQUOT", errno.ENOSPC),
         errno.EACCES,
         errno.EPERM,
         errno.EROFS,
@@ -453,8 +455,11 @@ def system_error(command: str, exc: OSError | MemoryError) -> int:
         )
         return 1
     if exc.errno in SYSTEM_ERRNOS:
+        from features.fileio import write_error
+
         where = f"{shown(str(exc.filename))}: " if exc.filename is not None else ""
-        print(f"posecbr {command}: error: {where}{exc.strerror}", file=sys.stderr)
+        said = write_error(exc) if exc.errno in NO_ROOM_ERRNOS else exc.strerror
+        print(f"posecbr {command}: error: {where}{said}", file=sys.stderr)
         return 1
     return internal_error(command, exc)
 

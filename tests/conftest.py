@@ -4,6 +4,7 @@ import os
 import resource
 import signal
 import socket
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -248,12 +249,17 @@ def _no_progress_bars(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.fixture
 def file_size_limit() -> Iterator[Callable[[int], None]]:
     """Call it with a byte count: from then on, until the test ends, writing a file past that
-    size fails as a full disk does (``OSError`` EFBIG from the kernel, RLIMIT_FSIZE)."""
+    size fails as a full disk does (``OSError`` EFBIG from the kernel, RLIMIT_FSIZE).
+    Python's compiled modules are not written meanwhile: a module the command imports under
+    the limit had its ``.pyc`` cut at it (Python 3.11 takes the short write(2) for the
+    whole), and every later import of it in any process failed ("marshal data too short")."""
     soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
     # Without this the kernel kills the process (SIGXFSZ) instead of failing the write.
     handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    bytecode = sys.dont_write_bytecode
 
     def limit(n_bytes: int) -> None:
+        sys.dont_write_bytecode = True
         resource.setrlimit(resource.RLIMIT_FSIZE, (n_bytes, hard))
 
     try:
@@ -261,6 +267,7 @@ def file_size_limit() -> Iterator[Callable[[int], None]]:
     finally:
         resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
         signal.signal(signal.SIGXFSZ, handler)
+        sys.dont_write_bytecode = bytecode
 
 
 @pytest.fixture

@@ -104,7 +104,9 @@ def test_a_broken_pipe_inside_an_atomic_write_is_not_the_files_fault(tmp_path: P
         tmp.write_text("{}")
         raise BrokenPipeError(32, "Broken pipe")
     assert list(tmp_path.iterdir()) == []
-    with pytest.raises(DataError, match="cannot write: No space left on device"):
+    with pytest.raises(
+        DataError, match=r"cannot write: the disk is full \(No space left on device\)"
+    ):
         with atomic_path(dest) as tmp:
             raise OSError(28, "No space left on device")
     assert list(tmp_path.iterdir()) == []

@@ -215,7 +215,8 @@ def test_a_full_disk_for_the_matrices_is_a_note_after_the_stored_change_not_a_bu
     notes = [line for line in done.stderr.splitlines() if "No space left on device" in line]
     assert len(notes) == 1, done.stderr
     assert notes[0].startswith(f"note: {matrices}/") and notes[0].endswith(
-        "cannot write: No space left on device (the change is stored; commands read its cases "
+        "cannot write: the disk is full (No space left on device): free some space and run "
+        "again (the change is stored; commands read its cases "
         "from the database instead of a memory-mapped copy)"
     )
     store = open_store(db, readonly=True)

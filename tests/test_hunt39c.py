@@ -297,7 +297,7 @@ def test_the_exit_statuses_are_listed_alike_in_help_and_readme(
 @pytest.mark.parametrize(
     ("error", "status", "said"),
     [
-        (OSError(28, "No space left on device", "out.png"), 1, "error: out.png: No space left"),
+        (OSError(28, "No space left on device", "out.png"), 1, "out.png: cannot write: the disk"),
         (PermissionError(13, "Permission denied", "cb.sqlite"), 1, "error: cb.sqlite: Permission"),
         (MemoryError(), 1, "error: out of memory"),
         (OSError(9, "Bad file descriptor"), 70, "a bug in posecbr (OSError: [Errno 9] Bad file"),

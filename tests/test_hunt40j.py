@@ -109,7 +109,8 @@ def test_compare_results_csv_refused_keeps_the_earlier_run_whole(
     before = _digests(out)
     said = _compare_refused(refuse, out, capsys, monkeypatch)
     assert _digests(out) == before  # no hidden temporary left either
-    why = "No space left on device" if refuse is _refuse_making else "Input/output error"
+    why = "the disk is full (No space left on device): free some space and run again"
+    why = why if refuse is _refuse_making else "Input/output error"
     assert said == (
         f"posecbr compare: error: {out / 'results.csv'}: cannot write: {why}; none of the 2 files"
         " written (the earlier results.json and results.csv kept as they were)"
@@ -124,8 +125,8 @@ def test_compare_results_csv_refused_in_a_new_folder_leaves_no_folder(
     said = _compare_refused(_refuse_making, out, capsys, monkeypatch)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
     assert said == (
-        f"posecbr compare: error: {out / 'results.csv'}: cannot write: No space left on"
-        " device; none of the 2 files written"
+        f"posecbr compare: error: {out / 'results.csv'}: cannot write: the disk is full (No"
+        " space left on device): free some space and run again; none of the 2 files written"
     )
 
 
@@ -217,7 +218,8 @@ def test_extract_listing_refused_keeps_the_earlier_label_file_copies(
         write_listing(listing, out, [job], {out / "a.npz"})
     assert _digests(out) == before
     assert str(err.value) == (
-        f"{out / 'labels.csv'}: cannot write: No space left on device; none of the 2 files"
+        f"{out / 'labels.csv'}: cannot write: the disk is full (No space left on device): free"
+        " some space and run again; none of the 2 files"
         " written (the earlier a.txt and labels.csv kept as they were); the pose files are"
         " written (extract them again to list them)"
     )

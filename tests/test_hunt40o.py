@@ -145,8 +145,9 @@ def test_compare_second_results_json_refused_says_this_runs_file_is_kept(
     pictures = sorted(p.name for p in out.glob("*.png"))
     assert len(pictures) >= 2  # a confusion matrix and a timeline at least
     assert capsys.readouterr().err.splitlines()[-1] == (
-        f"posecbr compare: error: {out / 'results.json'}: cannot write: No space left on"
-        " device; not written (this run's results.json kept as it was); no results file names"
+        f"posecbr compare: error: {out / 'results.json'}: cannot write: the disk is full (No"
+        " space left on device): free some space and run again; not written (this run's"
+        " results.json kept as it was); no results file names"
         f" the {len(pictures)} pictures drawn into {out}"
     )
     doc = json.loads((out / "results.json").read_text(encoding="utf-8"))

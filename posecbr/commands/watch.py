@@ -1024,7 +1024,7 @@ class Watcher:
         from features.pose_estimation.overlay import pad_even
 
         if self.writer is None:
-            from features.fileio import temporary_file
+            from features.fileio import temporary_file, write_error
             from features.pose_estimation.overlay import check_mp4_size, even_size, padding_words
             from features.pose_estimation.recording import Recording
 
@@ -1033,7 +1033,7 @@ class Watcher:
             try:
                 self.rescue_path = temporary_file(self.args.out, RESCUE_SUFFIX)
             except OSError as exc:
-                raise DataError(f"cannot write: {exc.strerror or exc}", self.args.out) from None
+                raise DataError(write_error(exc), self.args.out) from None
             size = even_size(w, h)  # an odd side padded, not cut by the writer
             fps = float(self.fps or 30.0)
             self.writer = Recording(self.rescue_path, fps, size, str(self.args.out))

@@ -1,0 +1,125 @@
+"""Hunt 51x: a write past a file size limit said as every writer says it.
+
+- Every writer of the command line (pose files of ``convert`` and ``extract``, ``casebase
+  export``, JSON results, timeline pictures) says a full disk, a quota used up and a file
+  size limit (``ulimit -f``, RLIMIT_FSIZE: EFBIG) as the case base store, overlays and
+  ``watch --out`` do, through :func:`features.fileio.write_error`; before, a pose file said
+  Python's "cannot write: File too large", ``convert`` named its hidden staging folder's
+  copy instead of the pose file, and a raw EFBIG reaching the command was "a bug in posecbr"
+  (exit 70).
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from features.errors import DataError
+from features.fileio import write_together
+from features.poses import BLAZEPOSE_33, PoseSequence, save_pose
+from posecbr.cli import main
+from tests.badinput import good_pose_file, small_case_base
+
+LIMIT = "cannot write: the file would grow past a size limit such as `ulimit -f` (File too large)"
+
+
+def _noise_pose(path: Path, frames: int) -> Path:
+    """A pose file of random positions: it hardly compresses (33 x 3 x 8 bytes a frame)."""
+    positions = np.random.default_rng(0).normal(size=(frames, len(BLAZEPOSE_33), 3))
+    return save_pose(PoseSequence(positions, tuple(BLAZEPOSE_33), 30.0), path)
+
+
+def _error_line(capsys: pytest.CaptureFixture[str]) -> str:
+    [line] = capsys.readouterr().err.splitlines()
+    return line
+
+
+def test_convert_past_a_file_size_limit_names_the_pose_file_and_the_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], file_size_limit: Callable[[int], None]
+) -> None:
+    """Before: "<out>/.posecbr-stage.<pid>@<host>.<random>/a.npz: cannot write: File too
+    large" (the hidden copy named, Python's words)."""
+    _noise_pose(tmp_path / "ds" / "walk" / "a.npz", 100)  # about 80 kB
+    out = tmp_path / "out"
+    capsys.readouterr()
+    file_size_limit(16 << 10)
+    assert main(["convert", str(tmp_path / "ds"), "--out", str(out)]) == 1
+    assert _error_line(capsys) == f"posecbr convert: error: {out / 'a.npz'}: {LIMIT}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds"]  # the folder it made gone
+
+
+def test_casebase_export_past_a_file_size_limit_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], file_size_limit: Callable[[int], None]
+) -> None:
+    db = small_case_base(tmp_path)
+    out = tmp_path / "cases.npz"
+    out.write_bytes(b"earlier")
+    capsys.readouterr()
+    file_size_limit(1 << 10)
+    assert main(["casebase", "export", "--db", str(db), "--out", str(out)]) == 1
+    assert _error_line(capsys) == f"posecbr casebase export: error: {out}: {LIMIT}"
+    assert out.read_bytes() == b"earlier"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cases.npz", "cb.sqlite", "train"]
+
+
+def test_files_written_together_past_a_limit_say_so_and_leave_none(
+    tmp_path: Path, file_size_limit: Callable[[int], None]
+) -> None:
+    """What ``extract`` (a pose file and its overlay), ``segment`` and ``compare`` (results
+    and pictures) write as one; the second file over the limit."""
+    small, large = tmp_path / "small.json", tmp_path / "large.npz"
+    large.write_bytes(b"earlier")
+    file_size_limit(4 << 10)
+    files: list[tuple[Path, Callable[[Path], Any]]] = [
+        (small, lambda p: p.write_bytes(bytes(100))),
+        (large, lambda p: p.write_bytes(bytes(8 << 10))),
+    ]
+    with pytest.raises(DataError) as caught:
+        write_together(files)
+    assert str(caught.value) == (
+        f"{large}: {LIMIT}; none of the 2 files written (the earlier large.npz kept as it was)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["large.npz"]
+    assert large.read_bytes() == b"earlier"
+
+
+@pytest.mark.parametrize(
+    ("code", "said"),
+    [
+        (errno.EFBIG, LIMIT),
+        (
+            errno.ENOSPC,
+            "cannot write: the disk is full (No space left on device): free some space and run"
+            " again",
+        ),
+    ],
+    ids=["EFBIG", "ENOSPC"],
+)
+def test_a_write_refused_for_room_outside_posecbr_s_writers_is_said_as_theirs(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    code: int,
+    said: str,
+) -> None:
+    """A raw OSError reaching the command (a library's own cache file, written as it works).
+    Before: EFBIG "internal error, a bug in posecbr" (exit 70); ENOSPC the bare "No space
+    left on device"."""
+    import features.fluents
+
+    pose = good_pose_file(tmp_path / "clip.npz")
+
+    def fail(*args: Any, **kwargs: Any) -> None:
+        raise OSError(code, os.strerror(code), str(tmp_path / "cache.nbc"))
+
+    monkeypatch.setattr(features.fluents, "evaluate", fail)
+    monkeypatch.delenv("POSECBR_DEBUG", raising=False)
+    capsys.readouterr()
+    assert main(["describe", str(pose)]) == 1
+    assert _error_line(capsys) == f"posecbr describe: error: {tmp_path / 'cache.nbc'}: {said}"
