@@ -225,23 +225,34 @@ def _refuse_semicolons(text: str, path: Path) -> None:
             )
 
 
+# two commas or two tabs with nothing but spaces (or other whitespace) between
+_EMPTY_CELL = re.compile(r"([,\t])[^\S\n]*\1")
+
+
 def _refuse_empty_labels(text: str, path: Path) -> None:
-    """Refuse a label file with an empty label between two commas (``1,1,,2``: a spreadsheet
-    row with a cell left empty, a frame or block nobody labelled), naming its first line
-    holding one: the separators run together, so every label after it was read one frame or
-    block early, and when the count still fitted (one label more than the frames need is
-    taken) nothing said so. Empty cells that end a line (a spreadsheet's shorter last row,
-    ``2,2,,``) are no label's place and are let be."""
+    """Refuse a label file with an empty label between two commas or two tabs (``1,1,,2``,
+    ``1<tab>1<tab><tab>2``: a spreadsheet row with a cell left empty, saved as CSV or as
+    "Tab delimited" text, a frame or block nobody labelled), naming its first line holding
+    one: the separators run together, so every label after it was read one frame or block
+    early, and when the count still fitted (one label more than the frames need is taken)
+    nothing said so. A tab separates cells as a comma does (labels lined up are lined up
+    with spaces, which may run). Empty cells that end a line (a spreadsheet's shorter last
+    row, ``2,2,,``) are no label's place and are let be, and so are the spaces and tabs that
+    begin one (a line indented)."""
     lines = text.splitlines()
     for line_no, line in enumerate(lines, start=1):
-        if (empty := re.search(r",[^\S\n]*,", line.rstrip(", \t"))) is not None:
+        cells = line.rstrip(", \t")
+        indent = len(cells) - len(cells.lstrip(" \t"))
+        if (empty := _EMPTY_CELL.search(cells, indent)) is not None:
             before = "\n".join([*lines[: line_no - 1], line[: empty.start()]])
             labels = [t for t in re.split(r"[\s,]+", before) if t]
             after = f" after label {len(labels)} ({_short(labels[-1])!r})" if labels else ""
+            between = "commas" if empty.group(1) == "," else "tabs"
+            aligned = "" if between == "commas" else " (to line labels up, use spaces)"
             raise DataError(
-                f"line {line_no}: an empty label between commas{after}; a label file gives"
+                f"line {line_no}: an empty label between {between}{after}; a label file gives"
                 " every frame or block a label (read without one, the labels after it would"
-                " fall a frame or block early): write one there",
+                f" fall a frame or block early): write one there{aligned}",
                 path,
             )
 

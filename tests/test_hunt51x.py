@@ -1,4 +1,5 @@
-"""Hunt 51x: a write past a file size limit said as every writer says it.
+"""Hunt 51x: a write past a file size limit said as every writer says it, and a tab-separated
+label file with an empty cell.
 
 - Every writer of the command line (pose files of ``convert`` and ``extract``, ``casebase
   export``, JSON results, timeline pictures) says a full disk, a quota used up and a file
@@ -7,6 +8,9 @@
   Python's "cannot write: File too large", ``convert`` named its hidden staging folder's
   copy instead of the pose file, and a raw EFBIG reaching the command was "a bug in posecbr"
   (exit 70).
+- A label file saved as a spreadsheet's "Tab delimited" text with a cell left empty
+  (``walk<tab><tab>sit``) is refused naming its line, as the same row saved as CSV is:
+  a run of tabs was one separator, and every label after the gap was read a frame early.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import pytest
 
 from features.errors import DataError
 from features.fileio import write_together
+from features.label_tracks import read_label_track
 from features.poses import BLAZEPOSE_33, PoseSequence, save_pose
 from posecbr.cli import main
 from tests.badinput import good_pose_file, small_case_base
@@ -123,3 +128,26 @@ def test_a_write_refused_for_room_outside_posecbr_s_writers_is_said_as_theirs(
     capsys.readouterr()
     assert main(["describe", str(pose)]) == 1
     assert _error_line(capsys) == f"posecbr describe: error: {tmp_path / 'cache.nbc'}: {said}"
+
+
+def test_a_tab_separated_label_file_with_an_empty_cell_is_refused(tmp_path: Path) -> None:
+    """Frame 4's cell left empty on the second row of a "Tab delimited" save: read as one
+    separator, sit would fall on frame 4, a frame early. Before: read as 7 labels."""
+    path = tmp_path / "labels.txt"
+    path.write_text("walk\twalk\nwalk\t\tsit\tsit\tsit\tsit\n")
+    with pytest.raises(DataError) as caught:
+        read_label_track(path)
+    assert str(caught.value) == (
+        f"{path}: line 2: an empty label between tabs after label 3 ('walk'); a label file"
+        " gives every frame or block a label (read without one, the labels after it would"
+        " fall a frame or block early): write one there (to line labels up, use spaces)"
+    )
+    # a tab and spaces in one cell's place: empty too (label 1 on line 1)
+    path.write_text("walk\t \tsit\n")
+    with pytest.raises(
+        DataError, match=r"^\S+: line 1: an empty label between tabs after label 1 "
+    ):
+        read_label_track(path)
+    # one tab between labels, runs of spaces, a line indented, empty cells ending a row
+    path.write_text("walk\twalk  walk\n\t\tsit\tsit   sit\tsit\t\t\n")
+    assert read_label_track(path) == ["walk"] * 3 + ["sit"] * 4
