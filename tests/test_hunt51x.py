@@ -8,6 +8,10 @@ label file with an empty cell.
   Python's "cannot write: File too large", ``convert`` named its hidden staging folder's
   copy instead of the pose file, and a raw EFBIG reaching the command was "a bug in posecbr"
   (exit 70).
+- Under a file size limit no compiled module (``.pyc``) is written: Python 3.11 wrote each
+  in one write(2) and took the short write for the whole, so a ``posecbr`` run under
+  ``ulimit -f 16`` left its modules' ``.pyc`` cut at the limit, and every later run, with
+  no limit, ended in a raw traceback ("EOFError: marshal data too short").
 - A label file saved as a spreadsheet's "Tab delimited" text with a cell left empty
   (``walk<tab><tab>sit``) is refused naming its line, as the same row saved as CSV is:
   a run of tabs was one separator, and every label after the gap was read a frame early.
@@ -16,7 +20,11 @@ label file with an empty cell.
 from __future__ import annotations
 
 import errno
+import marshal
 import os
+import resource
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -29,7 +37,7 @@ from features.fileio import write_together
 from features.label_tracks import read_label_track
 from features.poses import BLAZEPOSE_33, PoseSequence, save_pose
 from posecbr.cli import main
-from tests.badinput import good_pose_file, small_case_base
+from tests.badinput import ROOT, good_pose_file, small_case_base
 
 LIMIT = "cannot write: the file would grow past a size limit such as `ulimit -f` (File too large)"
 
@@ -128,6 +136,36 @@ def test_a_write_refused_for_room_outside_posecbr_s_writers_is_said_as_theirs(
     capsys.readouterr()
     assert main(["describe", str(pose)]) == 1
     assert _error_line(capsys) == f"posecbr describe: error: {tmp_path / 'cache.nbc'}: {said}"
+
+
+def test_a_command_under_a_file_size_limit_leaves_no_compiled_module_cut(tmp_path: Path) -> None:
+    """The command's modules compiled afresh (a cache folder of their own) under a limit of
+    4 KiB, which most of their ``.pyc`` files pass. Before: 25 of the 40 written (posecbr/cli.py
+    among them) were left 4096 bytes long, and the next run failed importing them."""
+    prefix = tmp_path / "pyc"
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONPYCACHEPREFIX": str(prefix)}
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    hard = resource.getrlimit(resource.RLIMIT_FSIZE)[1]
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, hard))
+
+    done = subprocess.run(
+        [sys.executable, "-m", "posecbr", "thresholds"],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, preexec_fn=limit,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "fluents" in done.stdout  # the thresholds table printed
+
+    def cut(pyc: Path) -> bool:
+        try:
+            marshal.loads(pyc.read_bytes()[16:])  # after the 16-byte header
+        except (EOFError, ValueError):
+            return True
+        return False
+
+    project = prefix / ROOT.relative_to(ROOT.anchor)  # the stdlib's: before posecbr runs
+    assert [p.name for p in project.rglob("*.pyc") if cut(p)] == []
 
 
 def test_a_tab_separated_label_file_with_an_empty_cell_is_refused(tmp_path: Path) -> None:
