@@ -48,6 +48,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 import argparse  # noqa: E402
 import time  # noqa: E402
 import zlib  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -77,7 +78,7 @@ def session(
     order = [clips[int(i)] for i in rng.permutation(len(clips))]
     joined = join_repetitions([c.seq for c in order])
     spans = [(int(s), int(s) + c.seq.n_frames) for s, c in zip(joined.starts, order, strict=True)]
-    seq = joined.seq.with_metadata(source=name)
+    seq = replace(joined.seq, source=name)
     return seq, spans, [str(clip_target(c, "correct")) for c in order]
 
 

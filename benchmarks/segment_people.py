@@ -64,7 +64,7 @@ import time  # noqa: E402
 import warnings  # noqa: E402
 from collections import defaultdict  # noqa: E402
 from collections.abc import Iterator  # noqa: E402
-from dataclasses import dataclass  # noqa: E402
+from dataclasses import dataclass, replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -172,7 +172,7 @@ def joined_recording(
             labels.append(g.movement)
     joined = join_repetitions(reps, labels=labels)
     assert joined.labels is not None
-    seq = joined.seq.with_metadata(source=name)
+    seq = replace(joined.seq, source=name)
     jump = float(joined.jumps_m.max()) if len(joined.jumps_m) else 0.0
     blocks = block_labels(joined.labels, seq.fps)
     return Recording(name, person, seq, blocks, tuple(g.movement for g in chosen), jump)
@@ -231,8 +231,8 @@ def joined_training(train: list[Group], read: Reader) -> list[tuple[Any, Group]]
     out = []
     for g in train:
         seq = join_repetitions([read(g, p) for p in g.files]).seq
-        out.append((seq.with_metadata(label=g.movement, subject=g.person,
-                                      source=f"{g.person}_{g.movement}"), g))  # fmt: skip
+        seq = replace(seq, source=f"{g.person}_{g.movement}")
+        out.append((seq.with_metadata(label=g.movement, subject=g.person), g))
     return out
 
 

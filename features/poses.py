@@ -355,6 +355,10 @@ class PoseSequence:
         return replace(self, positions=self.positions[start:stop], confidence=conf, metadata=meta)
 
     def with_metadata(self, **updates: Any) -> PoseSequence:
+        """The sequence with the metadata keys ``updates`` set. ``source`` among them is a
+        metadata key (a labels CSV's column of that name), not the recording's own
+        :attr:`source`, which names it to the case base (its held-out checks group cases by
+        it): name the recording with ``dataclasses.replace(seq, source=...)``."""
         meta = dict(self.metadata)
         meta.update(updates)
         return replace(self, metadata=meta)

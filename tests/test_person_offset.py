@@ -55,8 +55,8 @@ def _bd_and_bk(shared_data: Path) -> tuple[CaseBaseClassifier, PoseSequence, np.
     clips = []
     for move in MOVES:
         seq = join_repetitions(_takes(root, "bd", move)).seq
-        clips.append(Clip(seq.with_metadata(label=move, subject="bd", source=f"bd_{move}"),
-                          move, "bd", {}))  # fmt: skip
+        seq = dataclasses.replace(seq, source=f"bd_{move}")
+        clips.append(Clip(seq.with_metadata(label=move, subject="bd"), move, "bd", {}))
     windows = split_windows(clips).clips
     clf = CaseBaseClassifier(feature_weights="none").fit(
         [c.seq for c in windows], [c.label for c in windows]
@@ -68,7 +68,7 @@ def _bd_and_bk(shared_data: Path) -> tuple[CaseBaseClassifier, PoseSequence, np.
             labels.append(move)
     joined = join_repetitions(reps, labels=labels)
     assert joined.labels is not None
-    rec = joined.seq.with_metadata(source="bk")
+    rec = dataclasses.replace(joined.seq, source="bk")
     n_blocks = math.ceil(rec.n_frames / (rec.fps * 0.1) - 1e-9)
     centres = np.minimum(
         ((np.arange(n_blocks) + 0.5) * 0.1 * rec.fps).astype(int), rec.n_frames - 1
