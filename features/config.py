@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from features.errors import ConfigError
-from features.fileio import binary_kind
+from features.fileio import not_utf8
 
 # A configuration file is a few kilobytes; anything far larger is the wrong file.
 MAX_CONFIG_BYTES = 10 * 1024**2
@@ -46,15 +46,15 @@ def _read_text(path: Path, what: str) -> str:
 
 def _not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
     """What a configuration file that is not UTF-8 text is, after "is not UTF-8 text": UTF-16
-    (Notepad's "Unicode", PowerShell's ``>``) and the binary files a user has beside it (a
-    gzip-compressed copy, a case base) said as such, where every one was "a binary file?";
-    else where its first character that is not UTF-8 stands."""
-    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+    and the binary files a user has beside it (a gzip-compressed copy, a case base) said as
+    such, where every one was "a binary file?"; else where its first character that is not
+    UTF-8 stands."""
+    why = not_utf8(data, exc)
+    if why.utf16:
         return ": it is UTF-16 (its byte order mark); save it as UTF-8"
-    if (kind := binary_kind(data[:512])) is not None:
-        return f": it is {kind}"
-    line = data.count(b"\n", 0, exc.start) + 1
-    return f" ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8"
+    if why.binary is not None:
+        return f": it is {why.binary}"
+    return f" ({why.where}): save it as UTF-8"
 
 
 def read_config(

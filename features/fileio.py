@@ -36,6 +36,7 @@ import sys
 import tempfile
 from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -117,6 +118,29 @@ def binary_kind(head: bytes) -> str | None:
     if is_video(head):
         return "a video file"
     return None
+
+
+@dataclass(frozen=True)
+class NotUTF8:
+    """What bytes that are not UTF-8 text are (:func:`not_utf8`), for the one line refusing
+    them: ``binary``, a binary file a user could give in the place of a text file
+    (:func:`binary_kind`'s words; None for none); ``utf16``, UTF-16 text by its byte order
+    mark (Notepad's "Unicode", Excel's "Unicode Text", PowerShell's ``>``); ``where``, where
+    its first byte that is not UTF-8 stands ("invalid start byte at byte 4, line 2")."""
+
+    binary: str | None
+    utf16: bool
+    where: str
+
+
+def not_utf8(data: bytes, exc: UnicodeDecodeError) -> NotUTF8:
+    """What ``data``, the bytes of a text file that did not decode as UTF-8 (``exc``), are."""
+    line = data.count(b"\n", 0, exc.start) + 1
+    return NotUTF8(
+        binary_kind(data[:512]),
+        data.startswith((b"\xff\xfe", b"\xfe\xff")),
+        f"{exc.reason} at byte {exc.start}, line {line}",
+    )
 
 
 def is_video(head: bytes) -> bool:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from features.errors import DataError
-from features.fileio import binary_kind, path_exists
+from features.fileio import not_utf8, path_exists
 from features.text import counted
 
 
@@ -73,15 +73,12 @@ def utf8_text(data: bytes, what: str, path: Path) -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        if (kind := binary_kind(data[:512])) is not None:  # a case base given as --truth
-            raise DataError(f"is {kind}, not a {what}", path) from None
-        if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        why = not_utf8(data, exc)
+        if why.binary is not None:  # a case base given as --truth
+            raise DataError(f"is {why.binary}, not a {what}", path) from None
+        if why.utf16:
             raise DataError("UTF-16 text (its byte order mark): save it as UTF-8", path) from None
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise DataError(
-            f"not UTF-8 text ({exc.reason} at byte {exc.start}, line {line}): save it as UTF-8",
-            path,
-        ) from None
+        raise DataError(f"not UTF-8 text ({why.where}): save it as UTF-8", path) from None
 
 
 def refuse_inner_bom(text: str, what: str, path: Path, part: str = "a label") -> None:
