@@ -18,6 +18,8 @@ second to a stretch with nobody in view after them.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from cbr.estimator import CaseBaseClassifier
@@ -115,18 +117,25 @@ def test_the_person_seen_before_the_first_second_and_then_lost_is_not_nobody_in_
     105 counted 4 (by hand), in ``segment`` and ``watch`` alike. Before, ``watch`` gave
     nobody in view 0-105: its first segment took the label of its first hop, a second in,
     inside the stretch."""
-    from cbr.live import LiveSegmenter
-
-    rec = recordings["13_30"]
-    squat = rec.positions[int(11.8 * 120) : int(12.3 * 120)][::4]
-    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
-    pos = np.concatenate([squat, np.full((90, *knee.shape[1:]), np.nan), knee])
-    rec = PoseSequence(pos, rec.joint_names, 30.0, source="seen, lost, back")
-    offline = segment(classifier, rec).segments
-    live = LiveSegmenter(classifier, 30.0)
-    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    offline, watched = seen_lost_back(classifier, recordings["13_30"])
     for got in (offline, watched):
         assert [(s.start_frame, s.end_frame) for s in got] == [(0, 15), (15, 105), (105, 258)]
         assert [s.explanation == NOBODY for s in got] == [False, True, False]
         assert got[-1].label == "KneeRaise"
     assert len(offline[-1].repetitions) == watched[-1].repetitions == 4
+
+
+def seen_lost_back(model: Any, rec: PoseSequence) -> tuple[list[Any], list[Any]]:
+    """At 30 fps: ``rec``'s (13_30's) squats' first 0.5 s (frames 0-15), 3 s with every joint
+    missing (15-105), its knee raises (6.7-11.8 s: 105-258); its segments by ``segment`` and
+    by ``watch``'s live segmenter, of ``model``."""
+    from cbr.live import LiveSegmenter
+
+    squat = rec.positions[int(11.8 * 120) : int(12.3 * 120)][::4]
+    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
+    pos = np.concatenate([squat, np.full((90, *knee.shape[1:]), np.nan), knee])
+    rec = PoseSequence(pos, rec.joint_names, 30.0, source="seen, lost, back")
+    offline = segment(model, rec).segments
+    live = LiveSegmenter(model, 30.0)
+    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    return offline, watched

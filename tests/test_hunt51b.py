@@ -26,6 +26,7 @@ from cbr.estimator import CaseBaseClassifier
 from features.poses import PoseSequence
 from posecbr.cli import build_parser, main
 from tests.test_empty_arguments import _commands
+from tests.test_hunt50c import seen_lost_back
 from tests.test_segment import classifier, names, recordings  # noqa: F401 - the fixtures
 
 
@@ -214,16 +215,6 @@ def test_a_squats_way_down_lost_before_other_exercise_counts_none(
     the squat's segment ends as at a recording's end. Before: 1 in ``segment`` and
     ``watch`` (the far point where the person was lost kept, or the return filled in across
     the 3 s)."""
-    from cbr.live import LiveSegmenter
-    from cbr.segmentation import segment
-
-    rec = recordings["13_30"]
-    squat = rec.positions[int(11.8 * 120) : int(12.3 * 120)][::4]
-    knee = rec.positions[int(6.7 * 120) : int(11.8 * 120)][::4]
-    pos = np.concatenate([squat, np.full((90, *knee.shape[1:]), np.nan), knee])
-    rec = PoseSequence(pos, rec.joint_names, 30.0, source="seen, lost, back")
-    offline = segment(classifier, rec).segments
-    live = LiveSegmenter(classifier, 30.0)
-    watched = [s for frame in rec.positions for s in live.push(frame)] + live.finish()
+    offline, watched = seen_lost_back(classifier, recordings["13_30"])
     assert [(s.start_frame, len(s.repetitions)) for s in offline] == [(0, 0), (15, 0), (105, 4)]
     assert [(s.start_frame, s.repetitions) for s in watched] == [(0, 0), (15, 0), (105, 4)]
