@@ -22,61 +22,53 @@ so a write blocked by another client's lock fails with the same "locked" error. 
 transaction holds each case base it checks or creates (an advisory lock on its name) until it
 ends, so PostgreSQL's writers of one case base queue as SQLite's do.
 
-The same code runs on every backend; what differs is kept to :func:`_make_engine` and the
-per-dialect connect hooks. Values a stricter server would refuse (over-long names, NUL
-characters in text) are refused here first, with the same error on every backend.
+The same code runs on every backend; what differs is kept to :mod:`casebase_store.engine`
+(the engine and its per-dialect connect hooks). Values a stricter server would refuse
+(over-long names, NUL characters in text) are refused first (:mod:`casebase_store.encoding`),
+with the same error on every backend.
 """
 
 from __future__ import annotations
 
-import codecs
 import hashlib
-import io
 import json
 import os
-import re
 import sqlite3
 import uuid
-import weakref
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
-from dataclasses import dataclass, field
-from datetime import UTC, datetime
+from datetime import datetime
 from pathlib import Path
 from typing import Any, TypeVar, cast
-from urllib.parse import quote
 
 import numpy as np
-from sqlalchemy import (
-    Engine,
-    Table,
-    create_engine,
-    delete,
-    event,
-    func,
-    insert,
-    inspect,
-    select,
-    update,
-)
+from sqlalchemy import Engine, Table, delete, func, insert, inspect, select, update
 from sqlalchemy import text as sql_text
-from sqlalchemy.engine import URL, Connection, make_url
-from sqlalchemy.exc import ArgumentError, DBAPIError, SQLAlchemyError
+from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
-from features.errors import ConfigError, PosecbrError
-from features.fileio import (
-    SQLITE_MAGIC,
-    binary_kind,
-    file_head,
-    path_exists,
-    remove_stale_temporaries,
-    temporary_prefix,
-)
-from features.text import hide_passwords
-from features.values import is_number
+from features.fileio import path_exists, remove_stale_temporaries, temporary_prefix
 from features.version import __version__
 
+from .driver_errors import translate_error
+from .encoding import (
+    as_stored,
+    as_utc,
+    canonical_json,
+    check_case_base_name,
+    check_document,
+    check_poses,
+    check_text,
+    config_hash,
+    decode_array,
+    decode_arrays,
+    encode_array,
+    read_json,
+)
+from .engine import check_timeout, dispose, is_sqlite, leave_wal_mode, make_engine
+from .errors import CaseBaseGone, EmptyStore, StaleCaseError, StoreError
+from .journals import undo_failed_write
+from .locations import check_name_length, check_url_or_path, refuse_dangling, sqlite_file
 from .models import (
     SCHEMA_VERSION,
     UPGRADABLE,
@@ -86,6 +78,17 @@ from .models import (
     MaintenanceRow,
     RepresentationRow,
     SchemaVersion,
+)
+from .records import (
+    CaseArrays,
+    CaseBaseInfo,
+    MaintenanceEntry,
+    NewCase,
+    Seen,
+    SourcedCase,
+    StoredCase,
+    WholeCaseBase,
+    check_width,
 )
 
 ORIGINS = ("trained", "retained", "revised")
@@ -98,137 +101,6 @@ _PG_INIT_LOCK = 0x706F736563627231  # "posecbr1"
 _PG_NAME_LOCKS = 0x706F7365  # "pose"
 
 
-class StoreError(PosecbrError):
-    """The case base store cannot be opened, read or written (names the database)."""
-
-
-class NotADatabase(StoreError):
-    """A file that is no SQLite database; ``looks_like``: what it looks like it is (a pose
-    file, a picture, ...), or None. The store does not know where its path came from: the
-    command line says which option takes the case base (:meth:`taken_by`)."""
-
-    def __init__(self, looks_like: str | None, where: str) -> None:
-        self.looks_like = looks_like
-        super().__init__(
-            f"not a readable SQLite database ({looks_like or 'corrupt or not a database'})", where
-        )
-
-    def taken_by(self, option: str) -> NotADatabase:
-        """The same refusal saying that ``option`` takes the case base file (the file given
-        to it looks like something else: the two files swapped); itself when it looks like
-        nothing known."""
-        if self.looks_like is None or self.source is None:
-            return self
-        said = NotADatabase(f"{self.looks_like}: {option} takes the case base file", self.source)
-        said.looks_like = self.looks_like
-        return said
-
-
-class EmptyStore(StoreError):
-    """A database without a case base store in it yet (``open_store`` without ``create``): the
-    first write creates one."""
-
-
-class InterruptedWrite(StoreError):
-    """A SQLite file whose last writer was killed inside a transaction: its ``-journal``
-    holds what to undo, which a command that only reads does not write
-    (:func:`roll_back_interrupted` does)."""
-
-
-class CaseBaseGone(StoreError):
-    """The case base read earlier was replaced or deleted by another process since: nothing
-    was written into what took its place, and what was written into it is gone with it."""
-
-
-class StaleCaseError(StoreError):
-    """A case read earlier is no longer as it was (deleted, moved to another case base, or
-    trimmed by another process): nothing was written; reload and decide again."""
-
-
-@dataclass(frozen=True)
-class Seen:
-    """What a command that replaces case base ``name`` saw of it before its long work (the
-    training): its identity and version, or (``uid`` None) that there was none. The replace
-    is refused when the case base is no longer so: cases another process added, trimmed or
-    revised meanwhile, or a case base it created or replaced meanwhile, would be lost."""
-
-    uid: str | None = None
-    version: int | None = None
-
-
-# ----------------------------------------------------------------------------- arrays
-
-
-def encode_array(array: np.ndarray) -> bytes:
-    """``.npy`` bytes of ``array`` (no pickles: an array of Python objects is a
-    :class:`StoreError`)."""
-    values = np.asarray(array, order="C")  # a 0-d array stays 0-d
-    if values.dtype.hasobject:
-        raise StoreError(
-            "an array of Python objects (dtype object) cannot be stored: "
-            "give numbers or text (a numeric or str dtype)"
-        )
-    buf = io.BytesIO()
-    np.save(buf, values, allow_pickle=False)
-    return buf.getvalue()
-
-
-def decode_array(data: bytes, what: str = "array", where: str = "") -> np.ndarray:
-    """The array stored by :func:`encode_array`; a damaged blob is a :class:`StoreError`
-    naming ``what`` (e.g. ``"features of case 12"``)."""
-    try:
-        array: np.ndarray = np.load(io.BytesIO(data), allow_pickle=False)
-        return array
-    except (ValueError, OSError, EOFError, TypeError) as exc:
-        raise StoreError(f"the {what} is damaged ({exc})", where or None) from None
-
-
-def decode_arrays(blobs: Sequence[bytes], what: Sequence[str], where: str = "") -> list[np.ndarray]:
-    """:func:`decode_array` of each of ``blobs`` (``what``: each one's name for an error),
-    as float64; a blob with the ``.npy`` header of the one before it (the cases of a case
-    base share theirs) is read as a view of its bytes, its header not parsed again (parsing
-    is most of :func:`numpy.load`'s time: 60 us a blob, 1.3 s of CPU for 20,000 cases)."""
-    out: list[np.ndarray] = []
-    head, like = b"", None
-    for blob, name in zip(blobs, what, strict=True):
-        if like is not None and len(blob) == len(head) + like.nbytes and blob.startswith(head):
-            out.append(np.frombuffer(blob, like.dtype, offset=len(head)).reshape(like.shape))
-            continue
-        array = decode_array(blob, name, where)
-        if not np.issubdtype(array.dtype, np.number) or np.iscomplexobj(array):
-            raise StoreError(f"the {name} is damaged (not real numbers)", where or None)
-        out.append(array.astype(np.float64, copy=False))
-        if array.dtype == np.float64 and array.flags.c_contiguous and 0 < array.nbytes:
-            head, like = blob[: len(blob) - array.nbytes], array
-    return out
-
-
-def _json(text: str, what: str, where: str) -> Any:
-    try:
-        return json.loads(text)
-    except (TypeError, ValueError) as exc:
-        raise StoreError(f"the {what} is not valid JSON ({exc})", where) from None
-
-
-def config_hash(config: Mapping[str, Any]) -> str:
-    """SHA-256 of the canonical JSON of a feature configuration."""
-    return hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
-
-
-def canonical_json(obj: Any) -> str:
-    return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
-
-
-def _utc(value: datetime) -> datetime:
-    """Timezone-aware UTC: SQLite hands stored times back naive (they were written in UTC),
-    PostgreSQL aware in the session's zone; callers get the same value from both."""
-    return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
-
-
-#: The longest case base name a store holds (its column's width on every backend)
-NAME_MAX = 200
-
-
 def listed_names(names: Sequence[str]) -> str:
     """Case base names as a list in a message: each as it is, or quoted when it would not
     read as itself there (spaces around it, a comma, a character that does not print):
@@ -238,878 +110,11 @@ def listed_names(names: Sequence[str]) -> str:
     )
 
 
-def check_case_base_name(name: str, where: str) -> str:
-    """``name`` when a store can hold it as a case base's name (text of at most
-    :data:`NAME_MAX` characters, not blank, no NUL, UTF-8); else a :class:`StoreError` naming
-    ``where``: for a command to refuse it before any work, as the write would."""
-    _check_text(name, "case base name", where, max_len=NAME_MAX)
-    if not name.strip():
-        raise StoreError("the case base name is empty", where)
-    return name
-
-
-def _check_text(value: str, what: str, where: str, max_len: int | None = None) -> str:
-    # PostgreSQL refuses NUL in text and enforces VARCHAR lengths, SQLite stores both; refuse
-    # them on every backend so a store behaves the same wherever it lives
-    if not isinstance(value, str):
-        raise StoreError(f"the {what} must be text, got {value!r}", where)
-    if "\x00" in value:
-        raise StoreError(f"{what} {value!r} contains a NUL character", where)
-    _check_utf8(value, what, where)
-    if max_len is not None and len(value) > max_len:
-        raise StoreError(
-            f"{what} is {len(value)} characters long (at most {max_len}): {value[:40]!r}...",
-            where,
-        )
-    return value
-
-
 def _inserted_id(result: Any) -> int:
     """The id of the one row an insert without RETURNING added."""
     key = result.inserted_primary_key
     assert key is not None  # an insert's result has one
     return int(key[0])
-
-
-def _check_poses(value: str, where: str) -> str:
-    """A case's poses digest: a SHA-256 as 64 hexadecimal digits (what compares them)."""
-    if not isinstance(value, str) or not re.fullmatch(r"[0-9a-f]{64}", value):
-        raise StoreError(f"a poses digest is 64 hexadecimal digits, got {value!r}", where)
-    return value
-
-
-def _check_utf8(value: str, what: str, where: str, within: str = "") -> None:
-    """Refuse text that has no UTF-8 form: a name read from a file or folder whose bytes are
-    not UTF-8 (Python keeps them as lone surrogates), which no database driver can send.
-    ``within``: the document that holds it."""
-    try:
-        value.encode("utf-8")
-    except UnicodeEncodeError:
-        said = f"the {within} holds {value!r}, which" if within else f"{what} {value!r}"
-        raise StoreError(
-            f"{said} is not UTF-8 text (a name in another encoding, from a file or folder"
-            " name?): rename it",
-            where,
-        ) from None
-
-
-def _check_document(doc: Any, what: str, where: str) -> Any:
-    """``doc`` (JSON-ready), every string in it checked by :func:`_check_utf8`."""
-    stack = [doc]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, str):
-            _check_utf8(item, "text", where, within=what)
-        elif isinstance(item, Mapping):
-            stack.extend(item.keys())
-            stack.extend(item.values())
-        elif isinstance(item, list | tuple):
-            stack.extend(item)
-    return doc
-
-
-def _as_stored(text: str) -> str:
-    """Provenance text (a clip's file name, a log entry's reason) as it is stored: bytes of a
-    file name that are not UTF-8 written as ``\\xNN`` (the name stays readable and the same
-    name is always stored alike)."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:
-        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-    return text
-
-
-# ----------------------------------------------------------------------------- records
-
-
-@dataclass(frozen=True)
-class NewCase:
-    """A case to add: problem ``features`` (any shape, same for the whole case base) + label;
-    ``poses``: a digest of the poses of the clip it was made of (what tells a copy of the clip
-    under another file name), None when not known."""
-
-    label: str
-    features: np.ndarray
-    source: str = ""
-    frame_start: int | None = None
-    frame_end: int | None = None
-    subject: str | None = None
-    skeleton: str | None = None
-    origin: str = "trained"
-    poses: str | None = None
-
-
-@dataclass(frozen=True)
-class CaseBaseInfo:
-    """What a case base is: its configuration, fitted model and size.
-
-    uid: the case base's identity (a replaced case base of the same name gets a new one);
-    version: grows by one with every committed change to its cases.
-    """
-
-    id: int
-    name: str
-    # the columns, the measure (its learned weights) and the model are left out of the repr:
-    # half a megabyte of it for a case base of 80 cases (``load_classifier``'s result printed)
-    feature_config: dict[str, Any] = field(repr=False)
-    feature_hash: str
-    feature_names: tuple[str, ...] = field(repr=False)
-    feature_words: tuple[str, ...] = field(repr=False)
-    similarity: dict[str, Any] = field(repr=False)
-    code_version: str
-    created_at: datetime
-    n_cases: int
-    label_counts: dict[str, int] = field(default_factory=dict)
-    uid: str = ""
-    version: int = 1
-    model: dict[str, Any] = field(default_factory=dict, repr=False)
-
-
-@dataclass(frozen=True)
-class StoredCase:
-    """One case as a transaction reads it (to change it)."""
-
-    id: int
-    label: str
-    features: np.ndarray
-    active: bool
-
-
-@dataclass(frozen=True)
-class SourcedCase:
-    """One case with its provenance, as :meth:`StoreTransaction.cases_framed` finds it;
-    ``poses``: the digest of its clip's poses, None when not known (stored before it was kept,
-    or in a store made before, which has no place for it)."""
-
-    id: int
-    source: str
-    frame_start: int | None
-    frame_end: int | None
-    features: np.ndarray
-    poses: str | None = None
-
-
-@dataclass(frozen=True)
-class CaseArrays:
-    """All (active) cases of a case base as arrays; row ``i`` of each is case ``ids[i]``.
-
-    features: ``(n_cases, *problem_shape)`` float64.
-    """
-
-    ids: np.ndarray  # (n,) int64
-    labels: np.ndarray  # (n,) str (object)
-    features: np.ndarray
-    sources: tuple[str, ...]
-    subjects: tuple[str | None, ...]
-    origins: tuple[str, ...]
-    frame_ranges: tuple[tuple[int | None, int | None], ...]
-    #: (n,) bool: the case takes part (False: trimmed; only with ``include_inactive``)
-    active: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-
-
-@dataclass(frozen=True)
-class MaintenanceEntry:
-    id: int
-    action: str
-    case_id: int | None
-    novelty: float | None
-    benefit: float | None
-    reason: str
-    at: datetime
-
-
-@dataclass(frozen=True)
-class WholeCaseBase:
-    """Everything one case base is, as its store holds it, for copying it to another store
-    exactly (:meth:`CaseStore.read_whole`, :meth:`StoreTransaction.copy_case_base`): its
-    description, its columns as stored (the configuration, names and model as their JSON
-    text, byte for byte), every case, in use or trimmed, by id (its problem as its stored
-    ``.npy`` bytes), the cached representations of its cases and its maintenance log, in
-    order. Dates are UTC."""
-
-    info: CaseBaseInfo
-    columns: dict[str, Any]
-    cases: tuple[dict[str, Any], ...]
-    representations: tuple[dict[str, Any], ...]
-    log: tuple[dict[str, Any], ...]
-
-
-def check_width(info: CaseBaseInfo, width: int, where: str) -> None:
-    """The case base names as many feature columns as its cases have (``width``), or is
-    damaged: a StoreError naming both."""
-    if len(info.feature_names) and width != len(info.feature_names):
-        raise StoreError(
-            f"case base {info.name!r} is damaged: its cases have {width} "
-            f"feature columns but the case base names {len(info.feature_names)}",
-            where,
-        )
-
-
-# ----------------------------------------------------------------------------- engine
-
-
-def _is_sqlite(engine: Engine) -> bool:
-    return engine.dialect.name == "sqlite"
-
-
-#: the start of a database URL of one of SQLAlchemy's dialects (``postgresql+psycopg:``)
-#: without the ``://`` before its server (a "/" or the ":" missing): a URL mistyped, not a
-#: file's name
-_MISTYPED_URL = re.compile(
-    r"(?i)(?:postgres(?:ql)?|mysql|mariadb|oracle|mssql|sqlite)(?:\+\w+)?(?::(?!//)|//)"
-)
-#: the user and password after it (``me:PASSWORD@host``), to hide the password
-_USER_PASSWORD = re.compile(r"^(/*[^:@/]*:)[^@]*@")
-#: a database URL with no scheme at all (``me:PASSWORD@host/db``): a user, a colon and a
-#: password before an "@", where a path's first folder is seldom so named
-_SCHEMELESS_URL = re.compile(r"[^:@/\\]+:[^@]*@")
-
-
-def sqlite_file(url_or_path: str | Path) -> Path | None:
-    """The file of a SQLite path or ``sqlite:///`` URL (None: another backend or in memory).
-    A database URL missing the ``//`` before its server (``postgresql:/me:PW@host/db``) that
-    is no file is refused as a mistyped URL, its password hidden: taken for a file's name, it
-    was printed whole in the refusal (or a file of that name made). So is one with no scheme
-    at all (``me:PW@host/db``)."""
-    text = str(url_or_path)
-    if "://" not in text:
-        typo = _MISTYPED_URL.match(text)
-        if typo and not os.path.lexists(text):
-            scheme = typo[0].rstrip(":/")
-            raise StoreError(
-                f'not a database URL ("://" goes after {scheme!r}) nor a case base file',
-                typo[0] + _USER_PASSWORD.sub(r"\1***@", text[typo.end() :]),
-            )
-        if _SCHEMELESS_URL.match(text) and not os.path.lexists(text):
-            raise StoreError(
-                "looks like a database URL without its scheme (postgresql+psycopg://...),"
-                " and is no case base file",
-                _USER_PASSWORD.sub(r"\1***@", text),
-            )
-        return Path(text)
-    try:
-        url = make_url(text)
-    except (ArgumentError, ValueError):  # ValueError: a port that is not a number
-        return None
-    if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
-        return None
-    db = str(url.database)
-    return Path(db[len("file:") :].split("?")[0]) if db.startswith("file:") else Path(db)
-
-
-def store_files(url_or_path: str | Path) -> list[Path]:
-    """The files of a SQLite store (path or ``sqlite:///`` URL) on this machine: the database
-    and its journals (``-journal``, ``-wal``, ``-shm``); none for another backend. What an
-    output of a command that reads the store must never be: ``--db sqlite:///cb.mp4
-    --overlay cb.mp4`` compared the URL's text with the output and missed it."""
-    file = sqlite_file(url_or_path)
-    if file is None:
-        return []
-    return [file.with_name(file.name + j) for j in ("", "-journal", "-wal", "-shm")]
-
-
-def same_store(a: str | Path, b: str | Path) -> bool:
-    """Whether two ``--db`` values name one store: one SQLite file (the same file, however
-    named: a link, ``./``, a ``sqlite:///`` URL), or one database of one server (backend,
-    host, port and database alike; the driver and the user may differ)."""
-    fa, fb = sqlite_file(a), sqlite_file(b)
-    if fa is not None or fb is not None:
-        if fa is None or fb is None:
-            return False
-        try:
-            return os.path.samefile(fa, fb)
-        except OSError:  # one of them not there (yet)
-            return fa.resolve() == fb.resolve()
-    try:
-        ua, ub = make_url(str(a)), make_url(str(b))
-    except (ArgumentError, ValueError):
-        return str(a) == str(b)
-
-    def key(u: URL) -> tuple[Any, ...]:
-        return (u.get_backend_name(), (u.host or "").lower(), u.port, u.database)
-
-    return key(ua) == key(ub)
-
-
-def in_wal_mode(path: Path) -> bool:
-    """Whether the SQLite file ``path`` is in WAL mode (as posecbr 0.1 wrote its stores), from
-    its header alone (bytes 18 and 19, the file format's write and read versions: 2 in WAL
-    mode), without opening it with SQLite."""
-    try:
-        if not path.is_file():  # a pipe would make open() wait for a writer
-            return False
-        with open(path, "rb") as fh:
-            head = fh.read(20)
-    except OSError:  # also a name longer than the file system allows
-        return False
-    return head.startswith(SQLITE_MAGIC) and 2 in head[18:20]
-
-
-def _sqlite_readonly_url(path: Path) -> URL:
-    """A read-only SQLite URL for ``path``. A database still in WAL mode (written by posecbr
-    0.1) needs its ``-wal`` and ``-shm`` files: where this process cannot create them (a
-    read-only folder) the file is opened ``immutable``. Where it can, SQLite creates them
-    and, opened read-only, cannot remove them again; ``immutable`` there would read without
-    locks a file that a writer may be converting or changing. So such a file in a folder that
-    can be written is refused before SQLite opens it: ``posecbr casebase upgrade`` (a writer)
-    converts it to a rollback journal once. A file with a rollback journal needs no side file
-    to be read, in any folder: it is read with SQLite's locks, which wait for a writer still
-    writing it and tell its journal from a killed writer's (read ``immutable``, a writer
-    elsewhere allowed to write the folder was said to be killed, and its changes read
-    half-made)."""
-    params = {"mode": "ro", "uri": "true"}
-    given, path = path, path.resolve()  # SQLite's side files are beside the file a link names
-    shm = path.with_name(path.name + "-shm")
-    writable = os.access(path.parent, os.W_OK)
-    if writable and in_wal_mode(path):
-        raise StoreError(
-            "the file is in WAL mode (as posecbr 0.1 wrote it): reading it would leave "
-            f"{path.name}-wal and {path.name}-shm beside it; convert it once with "
-            "`posecbr casebase upgrade --db FILE`",
-            given,
-        )
-    if not writable and not shm.exists() and in_wal_mode(path):
-        if _wal_frames(path):  # immutable ignores the -wal: unseen
-            raise StoreError(
-                f"{path.name}-wal beside it holds changes not yet in the file, and without "
-                f"{path.name}-shm, in a folder that cannot be written, they cannot be read: "
-                "copy the files to a folder that can be written and run `posecbr casebase "
-                "upgrade --db FILE` there",
-                given,
-            )
-        params["immutable"] = "1"
-    # built, not parsed: SQLAlchemy would undo the quoting, and SQLite would then read a "?",
-    # "#" or "%20" of the file's name as the URI's query, fragment or escape (a read of
-    # "a?b.sqlite" opened, and created, a file "a")
-    return URL.create("sqlite", database=f"file:{quote(str(path.resolve()))}", query=params)
-
-
-def _wal_frames(path: Path) -> bool:
-    """Whether ``path``'s ``-wal`` file holds frames (changes, committed or not, not yet copied
-    into the file): more than its 32-byte header."""
-    wal = path.with_name(path.name + "-wal")
-    try:
-        return wal.is_file() and wal.stat().st_size > 32
-    except OSError:
-        return False
-
-
-#: The first bytes of a rollback journal that holds a transaction (SQLite zeroes or deletes
-#: it when the transaction ends)
-_JOURNAL_MAGIC = bytes.fromhex("d9d505f920a163d7")
-
-_INTERRUPTED = (
-    "its last change was interrupted (the process writing it was killed): {journal} holds what "
-    "to undo"
-)
-
-
-def _journal(path: Path) -> Path:
-    """The rollback journal of the database file ``path``: beside the file a symbolic link
-    leads to, where SQLite writes it."""
-    real = path.resolve()
-    return real.with_name(real.name + "-journal")
-
-
-def _hot_journal(path: Path) -> bool:
-    """Whether ``path``'s rollback journal holds a transaction (left by a killed writer when no
-    process is writing it now)."""
-    try:
-        if not _journal(path).is_file():  # a pipe would make open() wait for a writer
-            return False
-        with open(_journal(path), "rb") as fh:
-            return fh.read(len(_JOURNAL_MAGIC)) == _JOURNAL_MAGIC
-    except OSError:
-        return False
-
-
-def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
-    """Undo the transaction a killed writer left in a SQLite file (its ``-journal``), as
-    SQLite does when a connection that may write opens it: for a command that will write,
-    which reads the store read-only first (a read-only connection cannot undo it and fails
-    with :class:`InterruptedWrite`). Returns whether one was undone; nothing happens to a
-    file without such a journal, another backend, or a transaction another process is still
-    writing (SQLite undoes only a journal whose writer is gone)."""
-    file = sqlite_file(url_or_path)
-    if file is None:
-        return False
-    check_name_length(file)
-    if not file.is_file() or not _hot_journal(file):
-        return False
-    _check_timeout(timeout_s)
-    for readonly in (True, False):  # first a look that writes nothing: is it to be undone?
-        engine, where = _make_engine(file, timeout_s, readonly)
-        try:
-            with engine.connect() as conn:
-                conn.exec_driver_sql("SELECT count(*) FROM sqlite_master").scalar()
-            return not readonly
-        except DBAPIError as exc:
-            code = getattr(exc.orig, "sqlite_errorcode", None)
-            if not (readonly and code == _SQLITE_READONLY_ROLLBACK):
-                raise _translate(exc, where, timeout_s) from None
-        finally:
-            dispose(engine)
-    return False
-
-
-def undo_failed_write(engine: Engine, timeout_s: float) -> None:
-    """After a write transaction of ``engine`` failed: undo what it wrote into a SQLite file.
-    A write that failed partway (the disk full, or a file size limit reached, as changed pages
-    spilled into the file) leaves the file half-changed and its journal beside it, for the
-    next connection that may write to undo: readers, which open it read-only, then refused it
-    as a killed writer's. The failed connection is closed first (it holds the journal's
-    changes undone no more). Nothing happens for another backend or a file without such a
-    journal."""
-    if not _is_sqlite(engine):
-        return
-    file = Path(str(engine.url.database))
-    if not _hot_journal(file):
-        return
-    engine.dispose()
-    with suppress(StoreError):  # another process writing now: its journal, not undone
-        roll_back_interrupted(file, timeout_s=min(timeout_s, 1.0))
-
-
-def prepare_write(url_or_path: str | Path, *, timeout_s: float = 30.0) -> bool:
-    """For a command that will change a store and reads it read-only first: refuse, before any
-    work, a SQLite file it cannot write (the file read-only, or its folder, where SQLite writes
-    its journal; a new file's folder), then undo a change a killed writer left half-made
-    (:func:`roll_back_interrupted`, whose answer it returns)."""
-    file = sqlite_file(url_or_path)
-    if file is not None:
-        check_name_length(file)
-    if file is not None and file.is_file():
-        check_writable(file)
-    elif file is not None and file.parent.is_dir() and not file.exists():
-        # a new file: its folder (``casebase copy --to`` said "unable to open database file")
-        if not os.access(file.parent, os.W_OK | os.X_OK):
-            raise StoreError(
-                f"cannot write the case base file: the folder {file.parent} is read-only", file
-            )
-    return roll_back_interrupted(url_or_path, timeout_s=timeout_s)
-
-
-def check_writable(file: Path) -> None:
-    """Refuse, in one line, an existing SQLite file this process cannot write: the file
-    read-only, or its folder (where SQLite writes its journal, and the ``-wal`` and ``-shm``
-    files of a file still in WAL mode)."""
-    folder = file.resolve().parent
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise StoreError(
-            f"cannot write the case base file: the folder {folder} is read-only (SQLite "
-            "writes its journal beside it)",
-            file,
-        )
-    if not os.access(file, os.W_OK):
-        raise StoreError("cannot write the case base file: it is read-only", file)
-
-
-#: SQLite's extended result code for a read-only connection that met such a journal
-_SQLITE_READONLY_ROLLBACK = 776
-#: SQLite's extended result code for a write(2) that failed (EIO; EFBIG: RLIMIT_FSIZE)
-_SQLITE_IOERR_WRITE = 778
-#: SQLite's result code for a write the disk had no room for (ENOSPC), of the file or journal
-_SQLITE_FULL = 13
-#: SQLite's extended result code for a write to a file deleted or renamed while open
-_SQLITE_READONLY_DBMOVED = 1032
-
-
-def _make_engine(url_or_path: str | Path, timeout_s: float, readonly: bool) -> tuple[Engine, str]:
-    """The engine for a case base file or database URL, configured for ``timeout_s`` and
-    ``readonly``, and the name to show for it (a URL without its password)."""
-    url, where = _engine_url(url_or_path, readonly)
-    backend = url.get_backend_name()
-    try:
-        engine = create_engine(url, **_connect_args(url, timeout_s))
-    except ImportError as exc:
-        hint = _driver_hint(url.drivername) if backend == "postgresql" else ""
-        raise StoreError(
-            f"the database driver for {url.drivername} is not installed: {exc}{hint}", where
-        ) from None
-    except (ArgumentError, SQLAlchemyError) as exc:
-        raise StoreError(f"cannot use database URL ({exc}){_scheme_hint(url)}", where) from None
-    if _is_sqlite(engine):
-        _configure_sqlite(engine, timeout_s, readonly)
-        if not readonly:
-            _hold_wal(engine, timeout_s, where)
-    elif engine.dialect.name == "postgresql":
-        _configure_postgresql(engine, timeout_s, readonly)
-    return engine, where
-
-
-def _driver_hint(drivername: str) -> str:
-    """What installs the missing PostgreSQL driver of ``drivername``: posecbr's extra installs
-    psycopg 3 (``postgresql+psycopg``), not psycopg2 or any other driver."""
-    extra = "pip install 'posecbr[postgres]'"
-    if drivername in ("postgresql", "postgresql+psycopg"):
-        return f" ({extra})"
-    return f" (install that driver, or write the URL as postgresql+psycopg://... after {extra})"
-
-
-def _hide_password(text: str) -> str:
-    """``text`` with the password of a URL in it replaced by ``***``, as SQLAlchemy shows a URL
-    it could read, for a URL it could not (as every message shows one)."""
-    return hide_passwords(text)
-
-
-def _shown_url(url: URL) -> str:
-    """``url`` as the user is shown it: without its password, whether given before the host
-    (``me:PASSWORD@host``) or as libpq's ``?password=`` parameter."""
-    hidden = {key: "***" for key in url.query if key.lower() == "password"}
-    text = url.update_query_dict(hidden).render_as_string(hide_password=True)
-    return text.replace("=%2A%2A%2A", "=***")
-
-
-def shown_db(url_or_path: str | Path) -> str:
-    """How to name a store to the user: a case base file as given, a database URL without its
-    password (``postgresql://me:***@host/db``), as :class:`StoreError` names them."""
-    text = str(url_or_path)
-    if "://" not in text:
-        return text
-    try:
-        return _shown_url(make_url(text))
-    except (ArgumentError, ValueError):
-        return _hide_password(text)
-
-
-def _scheme_hint(url: URL) -> str:
-    """What a URL SQLAlchemy has no dialect for was likely meant to say: ``postgres://``
-    (Heroku's and many a ``DATABASE_URL``'s spelling, which SQLAlchemy 1.4 dropped) is
-    ``postgresql://``; a scheme in capitals (``SQLITE:///cb.sqlite``) is read as written."""
-    scheme = url.drivername
-    backend, plus, driver = scheme.lower().partition("+")
-    if backend == "postgres":
-        return f": write postgresql{plus}{driver}:// (SQLAlchemy's name), not {scheme}://"
-    if scheme != scheme.lower():
-        return f": write the scheme in lower case, {scheme.lower()}://"
-    return ""
-
-
-def _engine_url(url_or_path: str | Path, readonly: bool) -> tuple[URL, str]:
-    """The database URL of a case base file (read-only when asked; its folder must exist) or
-    of a URL, and the name to show for it."""
-    file = sqlite_file(url_or_path)
-    if file is None:
-        text = str(url_or_path)
-        try:
-            url = make_url(text)
-        except ArgumentError as exc:
-            raise StoreError(f"not a database URL ({exc})", _hide_password(text)) from None
-        except ValueError:  # SQLAlchemy reads the port with int()
-            raise StoreError(
-                "not a database URL (its port is not a number)", _hide_password(text)
-            ) from None
-        if url.get_backend_name() == "sqlite":  # no file: in memory (sqlite://, :memory:)
-            raise StoreError(
-                "an in-memory SQLite database keeps nothing once the command ends: name a "
-                "case base file (a path, or sqlite:///FILE)",
-                text,
-            )
-        return url, _shown_url(url)
-    check_store_file(file)
-    if readonly:
-        return _sqlite_readonly_url(file), str(file)
-    # built, not parsed: a path's "?" or "%20" is part of the file name, not a URL's query or
-    # escape ("a?b.sqlite" as text made SQLAlchemy open a file "a")
-    return URL.create("sqlite", database=str(file)), str(file)
-
-
-def check_name_length(file: Path) -> None:
-    """Refuse a case base file name too long for the file system with its journal's ending
-    (SQLite writes ``NAME-journal``): before anything asks whether the file exists, which for
-    a name longer than the file system allows is an OSError, not "no"."""
-    try:
-        allowed = os.pathconf(file.parent, "PC_NAME_MAX")
-    except (OSError, ValueError):
-        allowed = 255
-    if len(os.fsencode(file.name + "-journal")) > allowed:
-        raise StoreError(
-            f"the file name is too long: {len(os.fsencode(file.name))} bytes, at most "
-            f"{allowed - len('-journal')} (SQLite writes a journal named NAME-journal beside it)",
-            file,
-        )
-
-
-def check_store_file(file: Path) -> None:
-    """Refuse a case base file that could not be written: a folder, a device, pipe or socket,
-    one in a folder that does not exist, or a name too long for its journal beside it (SQLite
-    writes ``NAME-journal``)."""
-    if not file.parent.exists():  # named with the file asked for, as every refusal of it
-        raise StoreError(f"folder does not exist ({file.parent})", file)
-    check_name_length(file)
-    if file.is_dir():
-        raise StoreError("is a folder, not a case base file", file)
-    if file.exists() and not file.is_file():  # SQLite would wait on a pipe for a writer
-        raise StoreError("is not a case base file: a device, pipe or socket", file)
-    for side in (Path(f"{file}{j}") for j in ("-journal", "-wal", "-shm")):
-        if side.exists() and not side.is_file():  # SQLite opens these too
-            raise StoreError(
-                f"{side.name} beside it, where SQLite keeps its journal, is not a file (a "
-                "folder, device, pipe or socket): remove or rename it",
-                file,
-            )
-    _refuse_dangling(file)
-
-
-def _refuse_dangling(file: Path) -> None:
-    """A symbolic link to a file that does not exist is refused: a new store appears under its
-    name only when no file of that name exists (never over one made meanwhile), and the link
-    is one for good."""
-    if file.is_symlink() and not file.exists():
-        raise StoreError(
-            f"is a symbolic link to {os.readlink(file)}, which does not exist: create the case"
-            " base there, or name another file",
-            file,
-        )
-
-
-def _connect_args(url: URL, timeout_s: float) -> dict[str, Any]:
-    """``create_engine`` keywords that bound how long connecting may wait."""
-    backend = url.get_backend_name()
-    if backend == "sqlite":
-        return {"connect_args": {"timeout": timeout_s}}
-    if backend == "postgresql" and "connect_timeout" not in url.query:
-        # libpq waits for an unreachable server as long as the OS does (minutes)
-        return {"connect_args": {"connect_timeout": max(1, int(round(timeout_s)))}}
-    return {}
-
-
-def _configure_sqlite(engine: Engine, timeout_s: float, readonly: bool) -> None:
-    # pysqlite's own transaction handling starts transactions late and never IMMEDIATE; take
-    # it over (SQLAlchemy's documented recipe) so writers lock up front and queue politely.
-    @event.listens_for(engine, "connect")
-    def _on_connect(dbapi_conn: sqlite3.Connection, _record: object) -> None:
-        dbapi_conn.isolation_level = None
-        cur = dbapi_conn.cursor()
-        cur.execute(f"PRAGMA busy_timeout = {int(timeout_s * 1000)}")
-        cur.execute("PRAGMA foreign_keys = ON")
-        if not readonly:  # the journal mode is a property of the file: readers leave it
-            # a rollback journal, not WAL: a reader then needs no side files, so reading
-            # creates nothing and works in a read-only folder. A store written in WAL mode by
-            # posecbr 0.1 is converted by its first writer, once a write of it has committed
-            # (leave_wal_mode): converting it here, on connecting, changed the file of a
-            # command then refused (an old schema, a name taken), which must change nothing
-            if not in_wal_mode(Path(str(engine.url.database))):
-                cur.execute("PRAGMA journal_mode = DELETE")
-            cur.execute("PRAGMA synchronous = FULL")
-        cur.close()
-
-    @event.listens_for(engine, "begin")
-    def _on_begin(conn: Connection) -> None:
-        write = conn.get_execution_options().get("posecbr_write", False)
-        conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
-
-
-#: Writer engines on a file in WAL mode with its ``-wal`` file beside it, and the read-only
-#: connection to the file :func:`_hold_wal` holds open for each
-_WAL_GUARDS: weakref.WeakKeyDictionary[Engine, sqlite3.Connection] = weakref.WeakKeyDictionary()
-
-
-def _hold_wal(engine: Engine, timeout_s: float, where: str) -> None:
-    """For the writer ``engine`` of a file in WAL mode (as posecbr 0.1 left its stores) whose
-    ``-wal`` file is there: hold a read-only connection to the file open until the writer's
-    connections have closed (:func:`dispose`). SQLite's last connection to close such a file
-    copies the ``-wal`` file's changes into it and deletes the ``-wal`` and ``-shm`` files (a
-    checkpoint): a command refused after opening the store (a name taken, a schema it cannot
-    convert) changed the file's bytes. The writer's connections then close while another is
-    open, which keeps them from it, and a read-only one cannot checkpoint. The first write
-    that commits lets it go to leave WAL mode (:func:`leave_wal_mode`). Without a ``-wal``
-    file the writer's close deletes the two it created and changes nothing."""
-    file = Path(str(engine.url.database)).resolve()
-    if not in_wal_mode(file) or not file.with_name(file.name + "-wal").exists():
-        return
-    url = f"file:{quote(str(file))}?mode=ro"
-    try:
-        guard = sqlite3.connect(url, uri=True, timeout=timeout_s, isolation_level=None)
-    except sqlite3.Error as exc:
-        raise _translate(exc, where, timeout_s) from None
-    try:
-        guard.execute("SELECT count(*) FROM sqlite_master").fetchone()
-    except sqlite3.Error as exc:
-        guard.close()
-        raise _translate(exc, where, timeout_s) from None
-    _WAL_GUARDS[engine] = guard
-
-
-def _let_wal_go(engine: Engine) -> None:
-    """Close the read-only connection :func:`_hold_wal` holds for ``engine``, if any."""
-    guard = _WAL_GUARDS.pop(engine, None)
-    if guard is not None:
-        guard.close()
-
-
-def dispose(engine: Engine) -> None:
-    """Close ``engine``'s connections, then the read-only one :func:`_hold_wal` may hold for
-    it (in this order: the writer's connections close while it is open, so a refused writer
-    leaves a file in WAL mode and its ``-wal`` file as they were)."""
-    engine.dispose()
-    _let_wal_go(engine)
-
-
-def leave_wal_mode(engine: Engine) -> bool:
-    """Convert the SQLite file of the writer ``engine`` from WAL mode (as posecbr 0.1 left its
-    stores) to a rollback journal, for readers that then need no side files; returns whether
-    it did. Run after a write committed, outside any transaction: a command refused before
-    (an old schema, a name taken) leaves the file as it was. Another process holding the file
-    open makes it wait (the busy timeout), then give up: the next writer converts it."""
-    _let_wal_go(engine)  # a write has committed: the file changes now, as it should
-    if not _is_sqlite(engine) or not in_wal_mode(Path(str(engine.url.database))):
-        return False
-    raw = engine.raw_connection()  # the driver's connection: no BEGIN around the PRAGMA
-    try:
-        cur = raw.cursor()
-        try:
-            cur.execute("PRAGMA journal_mode = DELETE")
-            row = cur.fetchone()
-            return row is not None and str(row[0]).lower() == "delete"
-        finally:
-            cur.close()
-    except sqlite3.Error:  # busy: left in WAL mode, which the next writer converts
-        return False
-    finally:
-        raw.close()
-
-
-def _configure_postgresql(engine: Engine, timeout_s: float, readonly: bool) -> None:
-    # the counterpart of SQLite's busy timeout: a statement waiting for another session's lock
-    # gives up after timeout_s (PostgreSQL's default is to wait forever)
-    @event.listens_for(engine, "connect")
-    def _on_connect(dbapi_conn: Any, _record: object) -> None:
-        cur = dbapi_conn.cursor()
-        cur.execute(f"SET lock_timeout = {int(timeout_s * 1000)}")
-        if readonly:
-            cur.execute("SET default_transaction_read_only = on")
-        cur.close()
-        dbapi_conn.commit()  # SET ran in the driver's implicit transaction
-
-
-#: How a server or driver says a connection that was open is gone (the server shut down or
-#: restarted, an administrator ended the session, the network dropped it).
-_LOST_WORDS = (
-    "terminating connection",  # PostgreSQL ending a session (pg_terminate_backend, shutdown)
-    "server closed the connection",  # libpq
-    "connection is closed",  # psycopg, on a connection already gone
-    "consuming input failed",  # psycopg, reading from a dropped socket
-)
-
-
-def _what_file(where: str) -> str | None:
-    """What a file that is no SQLite database looks like it is, for the one line that refuses
-    it (an input given where the case base goes, the two swapped); None when nothing known."""
-    head = file_head(where)
-    if head.startswith(SQLITE_MAGIC):  # a damaged database: no other kind of file
-        return None
-    if (kind := binary_kind(head)) is not None:
-        return kind
-    if _looks_like_text(head):
-        return "a text file, such as a labels CSV"
-    return None
-
-
-def _looks_like_text(head: bytes) -> bool:
-    """Whether a file's first bytes ``head`` read as UTF-8 text (a byte order mark, as Excel
-    saves a CSV, skipped; a character cut off by the end of ``head`` allowed): printable
-    characters, tabs and line ends, accented letters among them."""
-    try:
-        text = codecs.getincrementaldecoder("utf-8-sig")().decode(head, final=False)
-    except UnicodeDecodeError:
-        return False
-    return bool(text) and all(c.isprintable() or c in "\t\r\n" for c in text)
-
-
-def _by_sqlite_code(code: Any, where: str) -> StoreError | None:
-    """The line for a SQLite error its extended result code tells apart (None: read its
-    text)."""
-    folder = _journal(Path(where)).parent  # where the journal is, and would be removed
-    if code == _SQLITE_READONLY_ROLLBACK and not os.access(folder, os.W_OK | os.X_OK):
-        return InterruptedWrite(
-            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}; its folder cannot be "
-            "written, so it cannot be rolled back here: copy both files to a folder that "
-            "can be written and run `posecbr casebase upgrade --db FILE` there",
-            where,
-        )
-    if code == _SQLITE_READONLY_ROLLBACK and not os.access(where, os.W_OK):
-        # the file itself read-only (its folder writable): no command here can undo it
-        return InterruptedWrite(
-            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}; the file cannot be "
-            "written, so it cannot be rolled back here: make it writable, or copy both files "
-            "to where they can be written, and run `posecbr casebase upgrade --db FILE` there",
-            where,
-        )
-    if code == _SQLITE_READONLY_ROLLBACK:  # before "readonly" below: the file can be written
-        return InterruptedWrite(
-            f"{_INTERRUPTED.format(journal=_journal(Path(where)))}, and a command "
-            "that only reads writes nothing: undo it with `posecbr casebase upgrade --db FILE`"
-            " (a command that changes the case base also does)",
-            where,
-        )
-    if code == _SQLITE_READONLY_DBMOVED:  # not "read-only": the file went from under it
-        return StoreError(
-            "the case base file was deleted or moved while the store was open: nothing was"
-            " written (open the store again where the file is)",
-            where,
-        )
-    if code == _SQLITE_IOERR_WRITE:  # write(2) failed: EIO, or EFBIG past a file size limit
-        return StoreError(
-            "cannot write the database file: disk I/O error (a failing disk, or the file would "
-            "grow past a size limit such as `ulimit -f`)",
-            where,
-        )
-    if code == _SQLITE_FULL:  # "database or disk is full", said as "database error: ..."
-        return StoreError(
-            "cannot write the database file: the disk is full (no room for the file or the "
-            "journal SQLite writes beside it): free some space and run again",
-            where,
-        )
-    return None
-
-
-def _translate(exc: BaseException, where: str, timeout_s: float) -> StoreError:
-    text = str(getattr(exc, "orig", None) or exc).strip()
-    low = text.lower()
-    code = getattr(getattr(exc, "orig", None) or exc, "sqlite_errorcode", None)
-    known = _by_sqlite_code(code, where)
-    if known is not None:
-        return known
-    if "locked" in low or "busy" in low or "lock timeout" in low:
-        return StoreError(
-            f"database is locked by another process (gave up after {timeout_s:g} s)", where
-        )
-    if "not a database" in low or "malformed" in low or "disk image" in low:
-        return NotADatabase(_what_file(where), where)
-    if "unable to open" in low or "readonly" in low or "read-only" in low:
-        return StoreError(f"cannot open or write the database ({text})", where)
-    if "no such table" in low or ("relation" in low and "does not exist" in low):
-        first = text.splitlines()[0]
-        return StoreError(
-            f"not a whole posecbr case base store: a table is missing ({first})", where
-        )
-    if "could not decode" in low:
-        return StoreError(
-            "not a readable case base store (damaged: a text column holds bytes that are not"
-            " UTF-8)",
-            where,
-        )
-    if any(
-        words in low
-        for words in (
-            "connection failed",
-            "could not connect",
-            "connection refused",
-            "failed to resolve host",  # psycopg: a host name the DNS does not know
-            "could not translate host name",  # libpq's own words for it
-        )
-    ):
-        first = " ".join(text.split())
-        return StoreError(f"cannot connect to the database server ({first})", where)
-    if any(words in low for words in _LOST_WORDS):
-        first = " ".join(text.split())
-        return StoreError(f"the connection to the database server was lost ({first})", where)
-    first = text.splitlines()[0] if text else type(exc).__name__
-    return StoreError(f"database error: {first}", where)
-
-
-# ----------------------------------------------------------------------------- store
 
 
 class CaseStore:
@@ -1145,7 +150,7 @@ class CaseStore:
         except StoreError:
             raise
         except (DBAPIError, SQLAlchemyError, sqlite3.Error) as exc:
-            raise _translate(exc, self.where, self.timeout_s) from None
+            raise translate_error(exc, self.where, self.timeout_s) from None
 
     @contextmanager
     def transaction(self) -> Iterator[StoreTransaction]:
@@ -1190,7 +195,7 @@ class CaseStore:
                     found = "none" if row is None else str(row.version)
                     hint = ""
                     if row is not None and row.version in UPGRADABLE:
-                        db = "FILE" if _is_sqlite(self.engine) else "URL"  # not a file
+                        db = "FILE" if is_sqlite(self.engine) else "URL"  # not a file
                         hint = f" (convert it with `posecbr casebase upgrade --db {db}`)"
                     elif row is not None and row.version > SCHEMA_VERSION:
                         hint = " (written by a newer posecbr: read it with that one)"
@@ -1403,7 +408,7 @@ class CaseStore:
                 ).all()
             return [
                 MaintenanceEntry(
-                    r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, _utc(r.at)
+                    r.id, r.action, r.case_id, r.novelty, r.benefit, r.reason, as_utc(r.at)
                 )
                 for r in rows
             ]
@@ -1443,7 +448,7 @@ class CaseStore:
                     "code_version",
                 )
             }
-            columns["created_at"] = _utc(row.created_at)
+            columns["created_at"] = as_utc(row.created_at)
         self._check_problems(info, cases)
         for r in reps:
             decode_array(r["data"], f"cached {r['kind']} of case {r['case_id']}", self.where)
@@ -1456,9 +461,9 @@ class CaseStore:
                     self.where,
                 )
         for c in cases:
-            c["created_at"], c["updated_at"] = _utc(c["created_at"]), _utc(c["updated_at"])
+            c["created_at"], c["updated_at"] = as_utc(c["created_at"]), as_utc(c["updated_at"])
         for e in log:
-            e["at"] = _utc(e["at"])
+            e["at"] = as_utc(e["at"])
         return WholeCaseBase(info, columns, tuple(cases), tuple(reps), tuple(log))
 
     def _check_problems(self, info: CaseBaseInfo, cases: Sequence[Mapping[str, Any]]) -> None:
@@ -1531,18 +536,22 @@ class CaseStore:
         info = CaseBaseInfo(
             id=r.id,
             name=r.name,
-            feature_config=_json(r.feature_config, f"feature {what}", self.where),
+            feature_config=read_json(r.feature_config, f"feature {what}", self.where),
             feature_hash=r.feature_hash,
-            feature_names=tuple(_json(r.feature_names, f"feature names of {r.name!r}", self.where)),
-            feature_words=tuple(_json(r.feature_words, f"feature words of {r.name!r}", self.where)),
-            similarity=_json(r.similarity_config, f"similarity {what}", self.where),
+            feature_names=tuple(
+                read_json(r.feature_names, f"feature names of {r.name!r}", self.where)
+            ),
+            feature_words=tuple(
+                read_json(r.feature_words, f"feature words of {r.name!r}", self.where)
+            ),
+            similarity=read_json(r.similarity_config, f"similarity {what}", self.where),
             code_version=r.code_version,
-            created_at=_utc(r.created_at),
+            created_at=as_utc(r.created_at),
             n_cases=int(sum(counts.values())),
             label_counts={str(k): int(v) for k, v in counts.items()},
             uid=r.uid,
             version=int(r.version),
-            model=_json(r.model, f"model of case base {r.name!r}", self.where),
+            model=read_json(r.model, f"model of case base {r.name!r}", self.where),
         )
         for key, kind in (("feature_config", dict), ("similarity", dict), ("model", dict)):
             if not isinstance(getattr(info, key), kind):
@@ -1665,7 +674,7 @@ class StoreTransaction:
             ("similarity configuration", similarity),
             ("model", model or {}),
         ):
-            _check_document(doc, what, where)
+            check_document(doc, what, where)
         row = CaseBaseRow(
             uid=uuid.uuid4().hex,
             version=1,
@@ -1789,7 +798,7 @@ class StoreTransaction:
 
     def set_model(self, cb: CaseBaseInfo, model: Mapping[str, Any]) -> None:
         """Replace the fitted model of ``cb`` (what fit learned besides the cases)."""
-        _check_document(model, "model", self.store.where)
+        check_document(model, "model", self.store.where)
         self.session.execute(
             update(CaseBaseRow)
             .where(CaseBaseRow.id == cb.id)
@@ -1808,22 +817,22 @@ class StoreTransaction:
             if c.origin not in ORIGINS:
                 raise StoreError(f"unknown case origin {c.origin!r}", where)
             if c.skeleton is not None:
-                _check_text(c.skeleton, "skeleton name", where, max_len=64)
-            _check_text(_as_stored(c.source), "source", where)
+                check_text(c.skeleton, "skeleton name", where, max_len=64)
+            check_text(as_stored(c.source), "source", where)
             if c.subject is not None:
-                _check_text(c.subject, "subject", where)
+                check_text(c.subject, "subject", where)
             row = {
                 "case_base_id": cb.id,
-                "label": _check_text(str(c.label), "label", where),
+                "label": check_text(str(c.label), "label", where),
                 "features": encode_array(np.asarray(c.features)),
-                "source": _as_stored(c.source),
+                "source": as_stored(c.source),
                 "frame_start": c.frame_start,
                 "frame_end": c.frame_end,
                 "subject": c.subject,
                 "skeleton": c.skeleton,
                 "origin": c.origin,
             }
-            poses = None if c.poses is None else _check_poses(c.poses, where)
+            poses = None if c.poses is None else check_poses(c.poses, where)
             if self.store.keeps_poses:
                 row["poses"] = poses
             rows.append(row)
@@ -1853,10 +862,10 @@ class StoreTransaction:
     ) -> dict[tuple[str, int | None, int | None], int]:
         """The active cases of ``cb`` made from ``sources``, by (source, first frame, end
         frame): their ids (the first of each); each source as given (a file name that is not
-        UTF-8 is looked for as it is stored, :func:`_as_stored`)."""
+        UTF-8 is looked for as it is stored, :func:`as_stored`)."""
         given: dict[str, set[str]] = {}
         for source in sources:
-            given.setdefault(_as_stored(source), set()).add(source)
+            given.setdefault(as_stored(source), set()).add(source)
         wanted = sorted(given)
         out: dict[tuple[str, int | None, int | None], int] = {}
         for i in range(0, len(wanted), 500):  # bounded IN lists
@@ -1886,7 +895,7 @@ class StoreTransaction:
             .where(
                 CaseRow.case_base_id == cb.id,
                 CaseRow.active.is_(True),
-                CaseRow.poses == _check_poses(poses, self.store.where),
+                CaseRow.poses == check_poses(poses, self.store.where),
             )
             .order_by(CaseRow.id)
         )
@@ -1966,7 +975,7 @@ class StoreTransaction:
                 delete(RepresentationRow).where(RepresentationRow.case_id == int(case_id))
             )
         if label is not None:
-            row.label = _check_text(str(label), "label", self.store.where)
+            row.label = check_text(str(label), "label", self.store.where)
         row.origin = origin
         self.session.flush()
         self._changed.add(cb.id)
@@ -2027,33 +1036,10 @@ class StoreTransaction:
                 action=action,
                 novelty=None if novelty is None else float(novelty),
                 benefit=None if benefit is None else float(benefit),
-                reason=_as_stored(reason),
+                reason=as_stored(reason),
                 **({} if at is None else {"at": at}),
             )
         )
-
-
-EMPTY_DB = "is empty: name a case base file (SQLite) or a SQLAlchemy URL"
-"""The error of an empty case base path (``url_or_path``; the commands' ``--db``)."""
-
-
-def _check_timeout(timeout_s: Any) -> None:
-    """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
-    its busy timeout off for a negative one; a bool is no time)."""
-    if not (is_number(timeout_s) and 0.0 <= float(timeout_s) < float("inf")):
-        raise ConfigError(f"must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s")
-
-
-def check_url_or_path(url_or_path: Any, name: str = "url_or_path") -> None:
-    """Refuse, naming ``name`` (the caller's argument), what is no file path or URL, or an
-    empty one: ``open_store(5)`` made a file "5", and ``write_store(None, ...)`` (so
-    ``cbr.training.train(None, ...)``, an unset variable) a case base file "None"."""
-    if not isinstance(url_or_path, str | os.PathLike):
-        raise StoreError(
-            f"a case base is a file path or a SQLAlchemy URL, got {url_or_path!r}", name
-        )
-    if not str(url_or_path).strip():
-        raise StoreError(EMPTY_DB, name)
 
 
 def open_store(
@@ -2076,13 +1062,13 @@ def open_store(
     of another type (the commands say ``--db``).
     """
     check_url_or_path(url_or_path)
-    _check_timeout(timeout_s)
+    check_timeout(timeout_s)
     file = sqlite_file(url_or_path)
     if file is not None:
         check_name_length(file)
     if file is not None and (readonly or not create) and not path_exists(file):
         raise StoreError("no such case base file", file)
-    engine, where = _make_engine(url_or_path, timeout_s, readonly)
+    engine, where = make_engine(url_or_path, timeout_s, readonly)
     store = CaseStore(engine, where, timeout_s, readonly)
     try:
         store._init_schema(create and not readonly)
@@ -2136,7 +1122,7 @@ def write_store(
         try:
             os.link(tmp, file)  # appears whole, and never over a store made meanwhile
         except FileExistsError:
-            _refuse_dangling(file)  # else it "exists" for link() alone: this would loop
+            refuse_dangling(file)  # else it "exists" for link() alone: this would loop
             return write_store(url_or_path, action, timeout_s=timeout_s)
         except OSError as exc:
             raise StoreError(f"cannot create the case base file ({exc.strerror})", file) from None

@@ -21,6 +21,11 @@ from sqlalchemy import MetaData, inspect, text
 
 from features.version import __version__
 
+from .driver_errors import translate_error
+from .engine import dispose, in_wal_mode, leave_wal_mode, make_engine
+from .errors import StoreError
+from .journals import undo_failed_write
+from .locations import check_name_length, check_writable, sqlite_file
 from .models import (
     SCHEMA_VERSION,
     UPGRADABLE,
@@ -30,19 +35,7 @@ from .models import (
     RepresentationRow,
     SchemaVersion,
 )
-from .store import (
-    _PG_INIT_LOCK,
-    StoreError,
-    _make_engine,
-    _translate,
-    check_name_length,
-    check_writable,
-    dispose,
-    in_wal_mode,
-    leave_wal_mode,
-    sqlite_file,
-    undo_failed_write,
-)
+from .store import _PG_INIT_LOCK
 
 _TABLES = (CaseBaseRow, CaseRow, RepresentationRow, MaintenanceRow)
 
@@ -61,7 +54,7 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
     # still in WAL mode, "disk I/O error" with -wal and -shm files left beside it)
     if file is not None and _nothing_to_do_unwritable(file, timeout_s):
         return SCHEMA_VERSION
-    engine, where = _make_engine(url_or_path, timeout_s, readonly=False)
+    engine, where = make_engine(url_or_path, timeout_s, readonly=False)
     try:
         try:
             found = _convert(engine, where)
@@ -83,7 +76,7 @@ def upgrade_store(url_or_path: str | Path, *, timeout_s: float = 30.0) -> int:
     except StoreError:
         raise
     except Exception as exc:  # a driver error of any backend: one line naming the store
-        raise _translate(exc, where, timeout_s) from None
+        raise translate_error(exc, where, timeout_s) from None
     finally:
         dispose(engine)
 
@@ -172,7 +165,7 @@ def _missing(
     if file is not None and not file.is_file():
         return []
     try:
-        engine, _ = _make_engine(url_or_path, timeout_s, readonly=True)
+        engine, _ = make_engine(url_or_path, timeout_s, readonly=True)
     except Exception:  # a driver error of any backend: the upgrade says it
         return []
     try:
@@ -196,7 +189,7 @@ def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:
     except StoreError as refused:
         if in_wal_mode(file):  # leaving WAL mode writes the file
             raise
-        engine, where = _make_engine(file, timeout_s, readonly=True)
+        engine, where = make_engine(file, timeout_s, readonly=True)
         try:
             with engine.connect() as conn:
                 found = _schema_version(conn, where)
@@ -207,7 +200,7 @@ def _nothing_to_do_unwritable(file: Path, timeout_s: float) -> bool:
         except StoreError:
             raise
         except Exception as exc:  # a driver error: one line naming the store
-            raise _translate(exc, where, timeout_s) from None
+            raise translate_error(exc, where, timeout_s) from None
         finally:
             engine.dispose()
         if found != SCHEMA_VERSION:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
-from casebase_store.store import StoreError, decode_array, encode_array
+from casebase_store import StoreError, decode_array, encode_array
 from cbr.casebase import CaseBase
 from cbr.dad import DADClassifier
 from cbr.estimator import CaseBaseClassifier
