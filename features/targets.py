@@ -1,0 +1,58 @@
+"""A clip's value of a column (its label, subject or an extra, named in any case) as a class
+name, or read as yes or no."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .clips import Clip
+
+
+def extra(extras: Mapping[str, Any], column: str) -> Any:
+    """The value of ``column`` among a clip's extras, its name in any case (a labels CSV's
+    columns keep their spelling: ``Correct`` is the column ``correct``); None if absent."""
+    if column in extras:
+        return extras[column]
+    low = column.strip().lower()
+    return next((v for k, v in extras.items() if k.strip().lower() == low), None)
+
+
+def clip_column(clip: Clip, column: str) -> Any:
+    """A clip's value of ``column``: label, subject, or a metadata extra (None if absent)."""
+    if column == "label":
+        return clip.label
+    if column == "subject":
+        return clip.subject
+    value = extra(clip.extras, column)
+    return extra(clip.seq.metadata, column) if value is None else value
+
+
+def clip_target(clip: Clip, column: str) -> str | None:
+    """A clip's value of ``column`` as a class name (:func:`target_value`); None when the clip
+    has none (absent or empty)."""
+    value = clip_column(clip, column)
+    return None if value is None or value == "" else target_value(value)
+
+
+def target_value(value: Any) -> str:
+    """A column value as a class name: booleans (UI-PRMD's ``correct``) read "correct" /
+    "incorrect"."""
+    if isinstance(value, bool | np.bool_):
+        return "correct" if bool(value) else "incorrect"
+    return str(value)
+
+
+_TRUE = frozenset({"true", "1", "yes", "y", "t", "correct"})
+
+
+_FALSE = frozenset({"false", "0", "no", "n", "f", "incorrect"})
+
+
+def truth_value(value: Any) -> bool | None:
+    """A class name read as yes or no (``"true"``, ``"1"``, ``"correct"``, ... / ``"false"``,
+    ``"0"``, ``"incorrect"``, ...; any case); None when it reads as neither."""
+    text = str(value).strip().lower()
+    return True if text in _TRUE else False if text in _FALSE else None
