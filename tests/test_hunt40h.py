@@ -40,7 +40,7 @@ class _NoGrid:
 
     absent: list[bool] = []
     images: list[Any] = []
-    held: Any = None  # no frame held for the next
+    held: list[Any] = []  # no frame held for the next
 
     def take(self, frame: Any) -> list[Any]:
         return []

@@ -703,7 +703,7 @@ class Watcher:
         self.spent: KeptImages | None = None
         self.padding_said = False  # the note that the --out video's odd side is padded
         self.replaying = False  # the kept frames are taken again, at the rate they rose to
-        self.held_since = math.nan  # when the frame the grid holds for the next came
+        self.held_since: list[float] = []  # when each frame the grid holds (a pause's) came
         self.started = time.perf_counter()
 
     def warm_up(self) -> None:
@@ -812,20 +812,20 @@ class Watcher:
             return
         self._push(taken)
         if self.spent is not None and not any(
-            isinstance(held, _Kept) for held in (self._grid.prev, self._grid.held)
+            isinstance(held, _Kept) for held in (self._grid.prev, *self._grid.held)
         ):
             self.spent.close()  # no kept frame left to draw
             self.spent = None
         since = self._since(frame)
         if since == since and not self.replaying:  # not NaN: the source said when it read it
             now = time.perf_counter()
-            if self.held_since == self.held_since:  # the frame held before, given now
-                self.latency.add(now - self.held_since)  # (this one held too, or not)
-                self.held_since = math.nan
-            if self._grid.held is frame:  # its label comes with the next frame's
-                self.held_since = since
-                return
-            self.latency.add(now - since)
+            # the grid holds the latest of the frames held before and this one (none, or
+            # from one after a pause on): those before them given now
+            came = [*self.held_since, since]
+            given = max(0, len(came) - len(self._grid.held))
+            for since_given in came[:given]:
+                self.latency.add(now - since_given)
+            self.held_since = came[given:]
 
     def _push(self, taken: list[tuple[Any, Any, Any]]) -> None:
         """Push the grid times the grid just gave (:meth:`Regrid.take`) to the segmenter,
@@ -843,11 +843,13 @@ class Watcher:
     def _flush(self) -> None:
         """The stream has ended: push the grid times of the frame the grid held for the next
         (:meth:`Regrid.flush`), if any, its latency counted."""
-        if self._grid is None or self._grid.held is None or self.stdout_gone:
+        if self._grid is None or not self._grid.held or self.stdout_gone:
             return
         self._push(self._grid.flush())
-        if self.held_since == self.held_since:
-            self.latency.add(time.perf_counter() - self.held_since)
+        now = time.perf_counter()
+        for since in self.held_since:
+            self.latency.add(now - since)
+        self.held_since = []
 
     def _stop_keeping(self) -> None:
         """The stream's rate is followed as it is from here on: no frame kept any longer."""
@@ -1289,12 +1291,19 @@ times they came (:meth:`Regrid._placed`): 4-6 frames at once at 15 fps come afte
 0.27-0.40 s. The frames that come late after a longer pause, or that all still come late a
 pause later, came after a stall, its time left missing."""
 AT_ONCE = 0.75
-"""How soon (a share of the frame interval) the frame after one held after a pause
-(:meth:`Regrid._pausing`) must come for the pause to be a burst's (frames held up on the way,
-then read as fast as the reader takes them: the pose model's 10-13 ms a frame on a free core,
-a third of a 30-fps interval, more on a busy machine) rather than a drop-out's (the stream
-resuming at its own pace: a frame interval later, give or take its jitter; one jittered by
-more than a quarter interval is taken as a burst's, as every pause was before)."""
+"""How soon (a share of the frame interval) each frame after one held after a pause
+(:meth:`Regrid._pausing`) must come, a share of as many frame intervals as it lies after it,
+for the pause to be a burst's (frames held up on the way, then read as fast as the reader
+takes them: the pose model's 10-13 ms a frame on a free core, a third of a 30-fps interval,
+more on a busy machine) rather than a drop-out's (the stream resuming at its own pace: a
+frame interval apart, give or take their jitter): :meth:`Regrid._burst`."""
+JITTER = 0.4
+"""How far (a share of the frame interval) a live source's frames may each come off their
+time and a drop-out still be told from a burst (:meth:`Regrid._burst`): the time from the
+frame held after a pause to the j-th after it is then off its j frame intervals by less than
+twice as much, so a j-th that came sooner than that is a burst's; a burst's frames come at
+least j quarter intervals sooner (:data:`AT_ONCE`), so by the fourth one of the two is sure.
+A network stream's arrivals (+-10 ms at 30 fps: 0.3)."""
 REMAKE_S = 4.0
 """How long after a live source's first frame a rise of its rate (a stream that starts slow:
 15 fps, then 30 as a camera's auto exposure settles) may be taken by watching it again from
@@ -1367,9 +1376,9 @@ class Regrid:
         # the frames taken are a re-made grid's kept ones, taken again (:meth:`Watcher._remake`):
         # its notes were said when they first came (a stall said twice, its times a little off)
         self.quiet = False
-        # a live source's frame that came after a pause (:meth:`_pausing`), held until the
-        # next frame tells a burst from a drop-out (:meth:`_released`)
-        self.held: Any = None
+        # a live source's frame that came after a pause (:meth:`_pausing`) and those after
+        # it, held until they tell a burst from a drop-out (:meth:`_burst`, :meth:`_released`)
+        self.held: list[Any] = []
         if interval is not None:  # on the wall clock from the first frame, which came so
             self.resampling = self.by_clock = True
             self.interval = interval
@@ -1382,22 +1391,65 @@ class Regrid:
     def take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """(world, visibility, the frame on screen then) for each grid time up to this
         frame's (:attr:`absent` and :attr:`images` for each); none while this frame is held
-        (:meth:`_pausing`): the frame held before it is given first (:meth:`_released`)."""
-        held, self.held = self.held, None
-        if held is None:
+        (:attr:`held`: after a pause, :meth:`_pausing`, until the frames after it tell a
+        burst from a drop-out, :meth:`_burst`): the frames held before it are given first
+        (:meth:`_released`)."""
+        if not self.held:
             return self._take(frame)
-        out = self._released(held, frame)
-        absent, images = self.absent, self.images
-        out += self._take(frame)
-        self.absent, self.images = absent + self.absent, images + self.images
-        return out
+        self.held.append(frame)
+        burst = self._burst()
+        if burst is None:
+            self.absent, self.images = [], []
+            return []
+        return self._given(burst)
 
     def flush(self) -> list[tuple[Any, Any, Any]]:
-        """:meth:`take`'s grid times of the frame held when the stream ends (none when none
-        is): with no frame after it, placed at the time it came, as a drop-out's."""
-        held, self.held = self.held, None
-        self.absent, self.images = [], []
-        return [] if held is None else self._released(held, None)
+        """:meth:`take`'s grid times of the frames held when the stream ends (none when none
+        is): the first a burst's if a frame came after it (each at once: :meth:`_burst`),
+        else, with none after it, placed at the time it came, as a drop-out's."""
+        out: list[tuple[Any, Any, Any]] = []
+        absent: list[bool] = []
+        images: list[Any] = []
+        while self.held:  # a frame given may be held again, after a pause of its own
+            out += self._given(len(self.held) > 1)
+            absent, images = absent + self.absent, images + self.images
+        self.absent, self.images = absent, images
+        return out
+
+    def _burst(self) -> bool | None:
+        """Whether the frame held after a pause (the first of :attr:`held`) is the first of a
+        burst, told by the latest frame held after it, the j-th: False (a drop-out, the
+        stream resumed at its own pace) when it came no sooner than :data:`AT_ONCE` of j
+        frame intervals after the held one, as no burst's does; True when sooner than j
+        intervals less twice :data:`JITTER`'s, as no drop-out's does, its frames each off
+        their times by less than :data:`JITTER`; else None, told by the next (by the
+        fourth, one of the two holds). The time from the held frame to the j-th after it is
+        off its j intervals by twice an arrival's jitter at most, however large j; a burst's
+        frames come a quarter interval sooner each at least. A drop-out on time and a burst
+        read at once are told by the first frame, as before; before, the first frame alone
+        told every pause: 0.25-0.5-s drop-outs at 30 fps, arrivals +-10 ms, 13 of 100 taken
+        for bursts (poses up to 0.47 s off their times)."""
+        first, *after = self.held
+        since = (after[-1].time_s - first.time_s) / self.interval
+        if not since < AT_ONCE * len(after):
+            return False
+        return True if since < len(after) - 2.0 * JITTER else None
+
+    def _given(self, burst: bool) -> list[tuple[Any, Any, Any]]:
+        """:meth:`take`'s grid times of the frames held (:attr:`held`): the first after the
+        pause given as a burst's or not (:meth:`_released`), the others taken after it (one
+        of them held again after a pause of its own, and those after it; none after a rise
+        of the rate, :attr:`rose`: the grid is to be made again)."""
+        held, self.held = self.held, []
+        out = self._released(held[0], burst)
+        absent, images = self.absent, self.images
+        for frame in held[1:]:
+            if self.rose is not None:
+                break
+            out += self.take(frame)
+            absent, images = absent + self.absent, images + self.images
+        self.absent, self.images = absent, images
+        return out
 
     def _take(self, frame: Any) -> list[tuple[Any, Any, Any]]:
         """:meth:`take` of a frame when none is held."""
@@ -1467,18 +1519,20 @@ class Regrid:
             return False
         pause = frame.time_s - prev.time_s
         if self.by_clock:  # or after the frame before's place: a burst's frames placed late
-            pause = max(pause, self._on_clock(frame.time_s) - self.placed_s)
+            behind = self._on_clock(frame.time_s) - self.placed_s
+            late = self.clocked[-1][1] if self.clocked else math.inf
+            if not behind - self.interval < late - (1.0 - AT_ONCE) * self.interval:
+                pause = max(pause, behind)  # unless still catching up, as :meth:`_placed` says
         if not pause > bridge_limit_s(self.fps):
             return False
-        self.held, self.absent, self.images = frame, [], []
+        self.held, self.absent, self.images = [frame], [], []
         return True
 
-    def _released(self, held: Any, frame: Any) -> list[tuple[Any, Any, Any]]:
+    def _released(self, held: Any, burst: bool) -> list[tuple[Any, Any, Any]]:
         """:meth:`take` of the frame ``held`` after a pause (:meth:`_pausing`), told by the
-        ``frame`` after it (None: the stream ended). One that came less than :data:`AT_ONCE`
-        of a frame interval before it is the first of a burst (frames held up on the way and
-        read at once): placed a frame interval after the frame before, as the camera took it
-        (:meth:`_burst_begins`, :meth:`_placed`). Else the stream resumed at its own pace
+        frames after it (:meth:`_burst`). The first of a ``burst`` (frames held up on the way
+        and read at once) is placed a frame interval after the frame before, as the camera
+        took it (:meth:`_burst_begins`, :meth:`_placed`). Else the stream resumed at its own pace
         after a drop-out (the camera's frames of the pause lost, not held up): the frame lies
         at the time it came and the pause's grid times are left missing, said once on stderr
         (:meth:`_stalled`; :meth:`_placed`'s ``resumed``), as a stall longer than
@@ -1487,7 +1541,6 @@ class Regrid:
         pause was long, until half a second later the lag was made up, the pause's grid times
         left missing only then (0.27-0.45-s drop-outs every 2 s at 30 fps: 34 of 78 grid times
         missing outside the pauses, poses up to 0.43 s off the clock)."""
-        burst = frame is not None and frame.time_s - held.time_s < AT_ONCE * self.interval
         self.absent, self.images = [], []
         if not self.by_clock:
             if burst:
