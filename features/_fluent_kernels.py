@@ -36,6 +36,7 @@ without it, cold) for the same speed and the same confidences bit for bit.
 
 from __future__ import annotations
 
+import errno
 import math
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -48,12 +49,47 @@ from numba.extending import intrinsic
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
 
 
+#: What a write of numba's on-disk cache may fail with where there is no room for it: a full
+#: disk, a quota used up, a file size limit (``ulimit -f``).
+_NO_ROOM = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC), errno.EFBIG})
+
+
 def _compiled(**options: Any) -> Callable[[_Fn], _Fn]:
     """``numba.njit(**options)``, typed: numba's decorators carry no type hints, and the
-    compiled function takes and returns what the Python function declares."""
+    compiled function takes and returns what the Python function declares.
+
+    With ``cache=True`` a compiled function that finds no room to save itself to numba's
+    on-disk cache is used all the same, unsaved (compiled again by the next run): the cache
+    only saves the next run's compile time, and a write failing past ``ulimit -f`` ended a
+    command that writes no file of its own with "cannot write ... File too large". numba
+    writes each cache file to a temporary and renames it, so a write cut short leaves no
+    cache file behind."""
     jit: Any = njit
     decorator: Callable[[_Fn], _Fn] = jit(**options)
-    return decorator
+    if not options.get("cache"):
+        return decorator
+
+    def compiled(function: _Fn) -> _Fn:
+        dispatcher: Any = decorator(function)
+        _unsaved_without_room(dispatcher._cache)
+        result: _Fn = dispatcher
+        return result
+
+    return compiled
+
+
+def _unsaved_without_room(cache: Any) -> None:
+    """Make ``cache`` (a numba dispatcher's ``FunctionCache``) skip a save that finds no room."""
+    save = cache.save_overload
+
+    def save_overload(signature: Any, data: Any) -> None:
+        try:
+            save(signature, data)
+        except OSError as error:
+            if error.errno not in _NO_ROOM:
+                raise
+
+    cache.save_overload = save_overload
 
 
 _Codegen = Callable[[Any, Any, Any, Any], Any]

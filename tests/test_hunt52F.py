@@ -1,4 +1,5 @@
-"""Hunt 52F: a jittered drop-out of a live source.
+"""Hunt 52F: a jittered drop-out of a live source, and numba's on-disk cache past a file
+size limit.
 
 - A live source (``watch``) whose frames stop for a quarter to half a second and resume on
   time (a drop-out), its arrivals jittered, is told from a burst by the frames after the
@@ -6,13 +7,22 @@
   after the pause that came early and one after it late had the pause taken for a burst's
   (frames held up, read at once), every frame after it placed by its count, as early as the
   pause was long.
+- A kernel compiled with ``cache=True`` (``features._fluent_kernels._compiled``) that finds no
+  room to save itself to numba's cache (a file size limit, ``ulimit -f``; a full disk) is used
+  unsaved: before, numba's failed write ended the command, one that writes no file of its own
+  (``posecbr describe`` of a long clip), with "cannot write: ... File too large".
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
+
+import numba
 import numpy as np
 import pytest
 
+from features._fluent_kernels import _compiled
 from posecbr.commands.watch import Regrid
 from tests.test_hunt49e import _frame
 from tests.test_hunt50a import _taken
@@ -41,3 +51,26 @@ def test_a_jittered_drop_out_is_not_taken_for_a_burst(
     np.testing.assert_allclose(values[~lost], taken[~lost], atol=1e-9)
     err = capsys.readouterr().err
     assert err.count("the stream stalled") == 1 and "at once" not in err
+
+
+def _sum_of_squares(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i
+    return total
+
+
+def test_a_kernel_without_room_in_the_cache_is_used_unsaved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, file_size_limit: Callable[[int], None]
+) -> None:
+    """The cache's files of this function are several kB; with 1 kB allowed none fits. Before:
+    ``OSError: [Errno 27] File too large`` from numba's save."""
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    kernel = _compiled(cache=True)(_sum_of_squares)
+    file_size_limit(1 << 10)
+    assert kernel(5) == 0 + 1 + 4 + 9 + 16
+    # nothing cut at the limit left behind: numba writes a temporary and renames it
+    assert [
+        p.name for p in tmp_path.rglob("*") if p.is_file() and p.stat().st_size >= 1 << 10
+    ] == []
+    assert not list(tmp_path.rglob("*.tmp.*"))
