@@ -68,7 +68,9 @@ class HeifPicture:
     and cropped by its ``turns``), how many coded pictures it is made of (a grid's tiles: a
     phone's photo is 512x512 tiles put together; 1 for a picture coded whole), its
     transformative properties in the order its ipma box lists them (:data:`HeifTurn`,
-    :func:`heif_shown`) and its size as coded (its ispe property's width and height)."""
+    :func:`heif_shown`), its size as coded (its ispe property's width and height) and, where
+    its colr box's nclx range differs from its coded stream's (:func:`heif_ranges`), the
+    two (the stream's full range, the box's: :func:`heif_in_range`)."""
 
     brand: str
     width: int
@@ -76,6 +78,7 @@ class HeifPicture:
     tiles: int
     turns: tuple[HeifTurn, ...] = ()
     coded: tuple[int, int] = (0, 0)
+    ranges: tuple[bool, bool] | None = None
 
 
 HEIF_META_LIMIT = 16 << 20
@@ -107,8 +110,262 @@ def heif_picture(fh: Any, size: int, head: bytes) -> HeifPicture | None:
         return None
     coded = int.from_bytes(ispe[4:8], "big"), int.from_bytes(ispe[8:12], "big")
     turns, width, height = _heif_turns(listed, *coded)
-    tiles = len(_heif_derived_from(meta, boxes.get(b"iref"), primary)) or 1
-    return HeifPicture(brand, width, height, tiles, turns, coded)
+    parts = _heif_derived_from(meta, boxes.get(b"iref"), primary)
+    tile = _heif_property_list(meta, *boxes[b"iprp"], parts[0]) if parts else listed
+    first = dict(tile)
+    colr = next((b for n, b in [*listed, *tile] if n == b"colr" and b[:4] == b"nclx"), None)
+    if colr is not None and len(first.get(b"av1C", b"")) == 4 and b"iloc" in boxes:
+        # an av1C without the sequence header (libavif's): the coded picture's first OBUs
+        places = _heif_locations(meta, *boxes[b"iloc"])
+        item = parts[0] if parts else primary
+        if item in places and places[item][0] == 0:
+            at, n = places[item][1][0]
+            fh.seek(at)
+            first = {**first, b"av1C": first[b"av1C"] + bytes(fh.read(min(n, 1024)))}
+    ranges = heif_ranges(colr, first)
+    return HeifPicture(brand, width, height, len(parts) or 1, turns, coded, ranges)
+
+
+def heif_ranges(colr: bytes | None, coded: dict[bytes, bytes]) -> tuple[bool, bool] | None:
+    """Whether a HEIF picture's coded stream states full range (its configuration among the
+    properties ``coded``: an hvcC's sequence parameter set's VUI, an av1C's sequence
+    header; limited where it states none) and whether its colr box ``colr`` (the body)
+    does, when the box is an nclx one that says otherwise; None when they agree, or either
+    cannot be read. The box rules (ISO/IEC 23008-12; libheif and libavif decode by it), but
+    FFmpeg decodes by the stream's."""
+    if colr is None or len(colr) < 11 or colr[:4] != b"nclx":
+        return None
+    box = bool(colr[10] & 0x80)
+    stream = (
+        _hevc_full_range(coded[b"hvcC"])
+        if b"hvcC" in coded
+        else _av1_full_range(coded[b"av1C"])
+        if b"av1C" in coded
+        else None
+    )
+    return None if stream is None or stream == box else (stream, box)
+
+
+def heif_in_range(image: np.ndarray, ranges: tuple[bool, bool] | None) -> np.ndarray:
+    """``image`` (8-bit BGR), decoded in the range its coded stream states, as in the range
+    its colr box states (:func:`heif_ranges`: the stream's full range, the box's; None: as
+    it is): limited-range levels (16-235) FFmpeg stretched to 0-255 put back, or full-range
+    levels it took as 0-255 stretched from 16-235. The colour's share is scaled as the
+    grey's (its own scale differs by 2 %: 224 levels, not 219) and levels clipped in the
+    decoding stay clipped."""
+    if ranges is None:
+        return image
+    scale = 219.0 / 255.0
+    levels = image.astype(np.float32)
+    out = levels * scale + 16.0 if ranges[1] else (levels - 16.0) / scale
+    ranged: np.ndarray = np.clip(np.rint(out), 0, 255).astype(np.uint8)
+    return ranged
+
+
+class _Bits:
+    """A reader of the bits of a coded stream's header, most significant first."""
+
+    def __init__(self, data: bytes) -> None:
+        self.value, self.size, self.at = int.from_bytes(data, "big"), 8 * len(data), 0
+
+    def read(self, n: int) -> int:
+        if self.at + n > self.size:
+            raise ValueError("past the end")
+        self.at += n
+        return (self.value >> (self.size - self.at)) & ((1 << n) - 1)
+
+    def golomb(self) -> int:
+        """An unsigned Exp-Golomb number (ue(v))."""
+        zeros = 0
+        while not self.read(1):
+            zeros += 1
+            if zeros > 31:
+                raise ValueError("not a number")
+        return (1 << zeros) - 1 + self.read(zeros)
+
+
+def _hevc_full_range(config: bytes) -> bool | None:
+    """The video_full_range_flag of the sequence parameter set in an hvcC box's ``config``
+    (H.265 7.3.2.2, E.2.1): False where it has no VUI or no video signal type; None when
+    there is no SPS or it cannot be read."""
+    at = 23
+    try:
+        for _ in range(config[22] if len(config) > 22 else 0):
+            kind, count = config[at] & 63, int.from_bytes(config[at + 1 : at + 3], "big")
+            at += 3
+            for _ in range(count):
+                n = int.from_bytes(config[at : at + 2], "big")
+                if kind == 33:  # SPS
+                    return _sps_full_range(config[at + 2 : at + 2 + n])
+                at += 2 + n
+    except (ValueError, IndexError):  # cut short, or no SPS as H.265 has it
+        return None
+    return None
+
+
+def _sps_full_range(unit: bytes) -> bool:
+    """:func:`_hevc_full_range` of one SPS NAL unit (its two-byte header first)."""
+    bits = _Bits(unit[2:].replace(b"\0\0\3", b"\0\0"))  # emulation prevention bytes out
+    bits.read(4)
+    layers = bits.read(3)
+    _sps_layers(bits, layers)
+    bits.golomb()  # its ID
+    if bits.golomb() == 3:  # chroma format 4:4:4: separate colour planes
+        bits.read(1)
+    bits.golomb(), bits.golomb()  # width, height
+    if bits.read(1):  # a conformance window
+        for _ in range(4):
+            bits.golomb()
+    bits.golomb(), bits.golomb()  # bit depths
+    poc_bits = bits.golomb() + 4
+    for _ in range(9 + 3 * layers if bits.read(1) else 9):
+        bits.golomb()  # sub-layer ordering; block sizes, transform hierarchy depths
+    if bits.read(1) and bits.read(1):  # scaling lists, stated
+        _scaling_lists(bits)
+    bits.read(2)  # AMP, SAO
+    if bits.read(1):  # PCM
+        bits.read(8), bits.golomb(), bits.golomb(), bits.read(1)
+    _short_term_sets(bits, bits.golomb())
+    if bits.read(1):  # long-term reference pictures
+        for _ in range(bits.golomb()):
+            bits.read(poc_bits + 1)
+    bits.read(2)  # temporal MVP, strong intra smoothing
+    return bool(bits.read(1)) and _vui_full_range(bits)
+
+
+def _sps_layers(bits: _Bits, layers: int) -> None:
+    """Read past an SPS's temporal ID nesting flag and profile, tier and level (H.265 7.3.3)
+    for ``layers`` sub-layers."""
+    bits.read(1 + 88 + 8)
+    present = [(bits.read(1), bits.read(1)) for _ in range(layers)]
+    if layers:
+        bits.read(2 * (8 - layers))
+    for profile, level in present:
+        bits.read(88 * profile + 8 * level)
+
+
+def _scaling_lists(bits: _Bits) -> None:
+    """Read past an SPS's scaling list data (H.265 7.3.4)."""
+    for size in range(4):
+        for _ in range(0, 6, 3 if size == 3 else 1):
+            if not bits.read(1):
+                bits.golomb()
+                continue
+            for _ in range(min(64, 1 << (4 + (size << 1))) + (size > 1)):
+                bits.golomb()  # se(v): as long as ue(v)
+
+
+def _vui_full_range(bits: _Bits) -> bool:
+    """The video_full_range_flag of an SPS's VUI (H.265 E.2.1); False without a video
+    signal type."""
+    if bits.read(1) and bits.read(8) == 255:  # aspect ratio, stated as a fraction
+        bits.read(32)
+    if bits.read(1):  # overscan
+        bits.read(1)
+    if not bits.read(1):
+        return False
+    bits.read(3)
+    return bool(bits.read(1))
+
+
+def _short_term_sets(bits: _Bits, count: int) -> None:
+    """Read past an SPS's ``count`` short-term reference picture sets (H.265 7.3.7)."""
+    deltas: list[int] = []
+    for i in range(count):
+        if i and bits.read(1):  # predicted from the set before
+            bits.read(1), bits.golomb()
+            n = 0
+            for _ in range(deltas[i - 1] + 1):
+                used = bits.read(1)
+                n += used or bits.read(1)
+            deltas.append(n)
+        else:
+            negative, positive = bits.golomb(), bits.golomb()
+            for _ in range(negative + positive):
+                bits.golomb(), bits.read(1)
+            deltas.append(negative + positive)
+
+
+def _av1_full_range(config: bytes) -> bool | None:
+    """The color_range of the sequence header OBU in an av1C box's ``config`` (AV1 5.5; the
+    coded picture's OBUs after its four bytes where it holds none); None when there is none
+    or it cannot be read."""
+    at = 4
+    while at + 2 <= len(config):
+        header = config[at]
+        kind, at = (header >> 3) & 15, at + 1 + bool(header & 4)  # an extension byte
+        n, shift = len(config) - at, 0  # without a size: to the end
+        while header & 2 and at < len(config):  # its size, leb128
+            n = (n if shift else 0) | (config[at] & 127) << shift
+            shift, at = shift + 7, at + 1
+            if not config[at - 1] & 128:
+                break
+        if kind == 1:
+            try:
+                return _sequence_full_range(_Bits(config[at : at + n]))
+            except ValueError:
+                return None
+        at += n
+    return None
+
+
+def _sequence_full_range(bits: _Bits) -> bool:
+    """:func:`_av1_full_range` of a sequence header OBU's payload."""
+    profile = bits.read(3)
+    bits.read(1)  # still picture
+    reduced = bool(bits.read(1))  # a reduced still picture header
+    if reduced:
+        bits.read(5)
+    else:
+        _operating_points(bits)
+    width_bits, height_bits = bits.read(4) + 1, bits.read(4) + 1
+    bits.read(width_bits + height_bits)
+    if not reduced and bits.read(1):  # frame ID numbers
+        bits.read(7)
+    bits.read(3)  # 128x128 superblocks, filter intra, intra edge filter
+    if not reduced:
+        _inter_tools(bits)
+    bits.read(3)  # superres, CDEF, restoration
+    if bits.read(1) and profile == 2:  # high bit depth
+        bits.read(1)
+    mono = bool(bits.read(1)) if profile != 1 else False
+    described = (bits.read(8), bits.read(8), bits.read(8)) if bits.read(1) else (2, 2, 2)
+    return (not mono and described == (1, 13, 0)) or bool(bits.read(1))
+
+
+def _operating_points(bits: _Bits) -> None:
+    """Read past an AV1 sequence header's timing and operating points (AV1 5.5.1)."""
+    decoder_model, delay_bits = False, 0
+    if bits.read(1):  # timing info
+        bits.read(64)
+        if bits.read(1):  # equal picture interval
+            bits.golomb()  # uvlc: as ue(v)
+        decoder_model = bool(bits.read(1))
+        if decoder_model:
+            delay_bits = bits.read(5) + 1
+            bits.read(32 + 5 + 5)
+    display_model = bits.read(1)
+    for _ in range(bits.read(5) + 1):
+        bits.read(12)
+        if bits.read(5) > 7:
+            bits.read(1)
+        if decoder_model and bits.read(1):
+            bits.read(2 * delay_bits + 1)
+        if display_model and bits.read(1):
+            bits.read(4)
+
+
+def _inter_tools(bits: _Bits) -> None:
+    """Read past an AV1 sequence header's inter coding tools (AV1 5.5.1)."""
+    bits.read(4)  # inter-intra, masked compound, warped motion, dual filter
+    order_hint = bits.read(1)
+    if order_hint:
+        bits.read(2)
+    if bits.read(1) or bits.read(1):  # screen content tools: chosen, or forced on
+        if not bits.read(1):  # integer MV not chosen per frame
+            bits.read(1)
+    if order_hint:
+        bits.read(3)
 
 
 def _heif_turns(

@@ -62,6 +62,7 @@ from .containers import (  # noqa: E402
     VideoTrack,
     counted_by_duration,
     heif_grid,
+    heif_in_range,
     heif_picture,
     heif_shown,
     is_mp4,
@@ -398,7 +399,7 @@ def _whole_part(cap: cv2.VideoCapture, path: Path, head: bytes, width: int, heig
         with open(path, "rb") as fh:
             size = path.stat().st_size
             picture = heif_picture(fh, size, head)
-            if picture is None or _as_decoded(picture, width, height):
+            if picture is None or (_as_decoded(picture, width, height) and not picture.ranges):
                 return cap
             grid = heif_grid(fh, size, head)
     except OSError as exc:
@@ -437,9 +438,11 @@ def _whole_picture(
     cap.release()
     whole = f"{_a(picture.brand)} picture of {picture.width}x{picture.height}"
     if grid is not None:
-        bgr = heif_shown(_grid_picture(grid, source, whole), grid.turns)
+        bgr = heif_shown(
+            heif_in_range(_grid_picture(grid, source, whole), picture.ranges), grid.turns
+        )
     elif stored is not None:
-        bgr = heif_shown(stored, picture.turns)
+        bgr = heif_shown(heif_in_range(stored, picture.ranges), picture.turns)
     elif picture.tiles > 1:
         raise DataError(
             f"{whole} made of {picture.tiles} tiles (as a phone stores a photo), of which"
@@ -1618,7 +1621,7 @@ def _served_turn(cap: cv2.VideoCapture, url: str, timeout_s: float | None) -> tu
         return cap, 1
     width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
-    if picture is None or _as_decoded(picture, width, height):
+    if picture is None or (_as_decoded(picture, width, height) and not picture.ranges):
         return cap, 1
     try:
         grid = heif_grid(served, served.length, head)
