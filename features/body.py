@@ -357,12 +357,19 @@ def no_person(seq: PoseSequence) -> str:
     """Why ``seq``, no frame of which shows the torso (:func:`torso_share` 0), shows no person,
     in words: its torso joints are missing, or they are all there but the shoulders or the hips
     lie within :data:`~features.geometry.MIN_LINK_M` of each other (a pose at micrometre
-    scale, not in metres, or every joint at one point)."""
+    scale, not in metres, or every joint at one point). Torso joints missing in every frame
+    while the others are seen in some (the hips out of view below a close-up's bottom edge)
+    are named: "shows no person" said of a clip showing a person's shoulders and arms was
+    wrong."""
     if np.isfinite(seq.to_canonical().joints(TORSO_JOINTS)).all(axis=(-2, -1)).any():
         return (
             f"shows no person (its shoulders or hips lie within {MIN_LINK_M * 1e6:g} µm of each"
             " other in every frame: positions must be metres)"
         )
+    missing = torso_missing(seq)
+    if 0 < len(missing) < len(TORSO_JOINTS):  # the rest seen: out of view, or not recorded
+        named = ", ".join(j.replace("_", " ") for j in missing)
+        return f"shows no torso (no frame shows its {named})"
     return "shows no person (no frame with a torso)"
 
 
@@ -373,12 +380,29 @@ def torso_missing(seq: PoseSequence) -> list[str]:
     return [j for j, s in zip(TORSO_JOINTS, seen, strict=True) if not s]
 
 
-def check_person(seq: PoseSequence, nothing_to: str) -> None:
+def arms_alone(seq: PoseSequence) -> bool:
+    """Whether ``seq`` shows neither hip in any frame but the upper body in some: both
+    shoulders, distinct as the torso's must be, and an elbow (the hips out of view: a patient
+    filmed seated or close to the camera). Its arms' movement can be followed, from the
+    shoulders, elbows and wrists alone, where nothing that needs the body frame can. One hip
+    seen is no such clip: a hip missing throughout beside the other is a defect of the data."""
+    p = seq.to_canonical().joints(TORSO_JOINTS + ("left_elbow", "right_elbow"))
+    seen = np.isfinite(p).all(axis=-1)  # (frames, 6)
+    if seen[:, 2:4].any():
+        return False
+    shoulders = norm(p[:, 0] - p[:, 1]) >= MIN_LINK_M  # NaN (not seen): False
+    return bool((shoulders & seen[:, 4:].any(axis=-1)).any())
+
+
+def check_person(seq: PoseSequence, nothing_to: str, arms: bool = False) -> None:
     """Refuse ``seq`` (a DataError naming its source) when no frame of it shows the person:
     the torso, without which no angle or position has a body frame (:func:`torso_share` 0;
     :func:`no_person` says why). The one check ``segment`` and ``reps`` make of a recording
     (before, ``reps`` counted one with no hips from an elbow, one with no shoulders from the
     knees, one at micrometre scale from the hips' height, where ``segment`` refused it);
-    ``nothing_to``: what the refusal says cannot be done ("segment", "count")."""
-    if torso_share(seq) == 0.0:
+    ``nothing_to``: what the refusal says cannot be done ("segment", "count"). ``arms``:
+    a recording that shows the arms without the hips (:func:`arms_alone`) passes, ``reps``
+    counting an arm exercise filmed close up from the arms alone (it was refused as showing
+    no person)."""
+    if torso_share(seq) == 0.0 and not (arms and arms_alone(seq)):
         raise DataError(f"{no_person(seq)}: nothing to {nothing_to}", seq.source or None)

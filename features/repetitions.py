@@ -186,6 +186,23 @@ nearer ease (:func:`_rest_is_high`; read with one, UI-PRMD's shoulder rotations 
 elbow missing counted their rest plateaus, 7 of 6 and 6 of 5). A knee missing is placed
 where its hip and ankle fix it (:func:`_placed_knees`) and the leg's own angles are read:
 its line is read only when no knee is seen to measure the thigh and shank by."""
+ARM_RAISES: dict[str, tuple[str, tuple[str, str]]] = {
+    f"{s}_arm_raise": (f"{s}_armpit", (f"{s}_shoulder", f"{s}_elbow")) for s in ("left", "right")
+}
+"""An upper arm's angle from straight down (the world's vertical, as the trunk's inclination
+reads it), and the armpit angle it stands in for, from the shoulder and the elbow: with the
+hips out of view (a patient filmed close up or seated, the camera upright) the armpit angle
+has no trunk to be read against, and an arm raised sideways or forwards with a straight elbow
+moved in no angle that was read; such a clip was refused as showing no person. It takes part
+as a :data:`LIMB_LINES` line does: where the armpit angle does not and it does
+(:func:`_idle_lines`), so a clip that shows the hips is read as before. Standing or sitting
+upright, it is the armpit angle; at ease the arm hangs straight down (0)."""
+STAND_INS: dict[str, str] = {
+    **{n: angle for n, (angle, _) in LIMB_LINES.items()},
+    **{n: angle for n, (angle, _) in ARM_RAISES.items()},
+}
+"""Each angle read only where the one it stands in for is not (:data:`LIMB_LINES`,
+:data:`ARM_RAISES`), and that angle."""
 COUNTED_ANGLES: tuple[str, ...] = (
     tuple(
         f"{side}_{joint}"
@@ -196,6 +213,7 @@ COUNTED_ANGLES: tuple[str, ...] = (
     + TWIST_NAMES
     + (PELVIS_HEIGHT,)
     + tuple(LIMB_LINES)
+    + tuple(ARM_RAISES)
 )
 """The angles repetitions are read from: the eight limb joint angles (defined in every
 posture), the trunk's inclination from the vertical, and its bend, side bend and twist, and
@@ -203,7 +221,8 @@ the forearms' sideways direction across the upper arms (:func:`upper_arm_turn`: 
 upper arm about its own axis, shoulder internal and external rotation, which no joint angle
 sees), and the hips' height above the floor in trunk lengths (:func:`pelvis_height`: the
 whole body going up and down, a hop with still arms and straight legs), and, for a limb whose
-middle joint is missing, its line from root to end (:data:`LIMB_LINES`). The limb plane angles
+middle joint is missing, its line from root to end (:data:`LIMB_LINES`), and, for an arm
+whose hips are out of view, its angle from straight down (:data:`ARM_RAISES`). The limb plane angles
 are left out: a limb's projection on a plane it is nearly
 perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
 tried and left out: it did no better on UI-PRMD's training subjects."""
@@ -323,6 +342,7 @@ AT_EASE: dict[str, float] = {
     **{name: np.pi / 2 for name in ANGLE_SIGNALS if "sagittal" in name or "frontal" in name},
     **{name: np.pi / 2 for name in ANGLE_SIGNALS if "transverse" in name},
     **{name: 0.0 for name in TWIST_NAMES},
+    **{name: 0.0 for name in ARM_RAISES},
 }
 """Joint angles (radians) of a person standing at ease: elbows, knees and hips straight, arms
 down, head and trunk upright and facing forward. The rest end of a movement is the one nearer
@@ -520,6 +540,7 @@ def counted_angles(seq: PoseSequence) -> np.ndarray:
         **{
             n: joint_angle(*(p[:, JOINT_INDEX[j]] for j in js)) for n, (_, js) in LIMB_LINES.items()
         },
+        **{n: _from_down(p, *js) for n, (_, js) in ARM_RAISES.items()},
     }
     raw = np.stack([extra[n] if n in extra else sig.column(n) for n in COUNTED_ANGLES], axis=1)
     with np.errstate(invalid="ignore"):
@@ -618,14 +639,21 @@ def _placed_knees(canonical: PoseSequence) -> PoseSequence:
     return dataclasses.replace(canonical, positions=positions, confidence=confidence)
 
 
+def _from_down(p: np.ndarray, root: str, end: str) -> np.ndarray:
+    """``(frames,)`` the angle of the limb from ``root`` to ``end`` from straight down (the
+    world's vertical), radians, of positions ``p`` ``(frames, 33, 3)``."""
+    limb = p[:, JOINT_INDEX[end]] - p[:, JOINT_INDEX[root]]
+    return angle_between(limb, np.broadcast_to(-WORLD_UP, limb.shape))
+
+
 def _idle_lines(finite: np.ndarray, fps: float) -> list[int]:
-    """The columns of :data:`COUNTED_ANGLES` of the :data:`LIMB_LINES` that take no part,
-    from where each angle was computed, ``finite`` ``(frames, len(COUNTED_ANGLES))``: a line
-    takes part where its angle does not and the line does (:func:`_kept`)."""
+    """The columns of :data:`COUNTED_ANGLES` of the :data:`STAND_INS` that take no part,
+    from where each angle was computed, ``finite`` ``(frames, len(COUNTED_ANGLES))``: a stand-in
+    takes part where its angle does not and the stand-in does (:func:`_kept`)."""
     kept = _kept(_followed(finite, fps).sum(axis=0), int(finite.any(axis=1).sum()))
     index = {n: i for i, n in enumerate(COUNTED_ANGLES)}
-    used = {n for n, (angle, _) in LIMB_LINES.items() if kept[index[n]] and not kept[index[angle]]}
-    return [index[n] for n in LIMB_LINES if n not in used]
+    used = {n for n, angle in STAND_INS.items() if kept[index[n]] and not kept[index[angle]]}
+    return [index[n] for n in STAND_INS if n not in used]
 
 
 def _swing(frm: np.ndarray, to: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -871,6 +899,7 @@ _ANGLE_JOINTS: dict[str, tuple[str, ...]] = {
     **{f"{s}_upper_arm_turn": (*(f"{s}_{j}" for j in _ARM), *_TRUNK) for s in ("left", "right")},
     PELVIS_HEIGHT: (*_TRUNK, "left_ankle", "right_ankle"),
     **{n: js for n, (_, js) in LIMB_LINES.items()},
+    **{n: js for n, (_, js) in ARM_RAISES.items()},
 }
 
 
@@ -1375,7 +1404,7 @@ def count_repetitions(
             f" ({MIN_PERIOD_S:g} s)",
             seq.source or None,
         )
-    check_person(seq, "count")
+    check_person(seq, "count", arms=True)
     sig = movement_signals(seq)
     a, b = seen_frames(seq, sig, recording_edges)
     if (a, b) != (0, seq.n_frames):

@@ -117,7 +117,8 @@ def test_describe_names_the_missing_hips_and_describes_what_needs_no_body_frame(
     lines = _out(capsys, ["describe", str(clip)]).splitlines()
     assert lines[1] == (
         "no torso (left hip, right hip missing in every frame): no body frame, so only the"
-        " states that need none are described (classify, reps and segment refuse the clip)"
+        " states that need none are described (classify and segment refuse the clip, reps"
+        " counts the arms alone)"
     )
     assert not any("knee" in ln for ln in lines[3:])
 

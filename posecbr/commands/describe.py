@@ -159,12 +159,18 @@ def _nothing_to_describe(missing: str, where: Path) -> DataError:
     )
 
 
-def _no_torso_line(missing: str) -> str:
+def _no_torso_line(missing: str, arms: bool) -> str:
     """The line saying what a clip without a torso is described by (``missing``: the torso
-    joints it lacks, :func:`_missing_torso`)."""
+    joints it lacks, :func:`_missing_torso`; ``arms``: its arms are seen without the hips,
+    :func:`features.body.arms_alone`, and ``reps`` counts them)."""
+    refused = (
+        "classify and segment refuse the clip, reps counts the arms alone"
+        if arms
+        else "classify, reps and segment refuse the clip"
+    )
     return (
         f"no torso ({missing} missing in every frame): no body frame, so only the states that"
-        " need none are described (classify, reps and segment refuse the clip)"
+        f" need none are described ({refused})"
     )
 
 
@@ -207,6 +213,7 @@ class _Spool:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from features.body import arms_alone
     from features.fluents import DEFAULT_TABLE, FluentTable, evaluate
     from features.timeline import describe_clip, picture_mark, plot_timeline
 
@@ -239,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _header(args, seq)
     if missing is not None:
-        print(_no_torso_line(missing))
+        print(_no_torso_line(missing, arms_alone(seq)))
     if tl.unavailable():
         print(_unavailable_line(tl.unavailable()))
     if spool is not None:

@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from features.body import check_person
+    from features.body import arms_alone, check_person
 
     check_asf(args.asf, [args.clip])
     if args.plot is not None:
@@ -64,9 +64,15 @@ def run(args: argparse.Namespace) -> int:
         # a folder: <clip>.png in it
         args.plot = check_plot(args.plot, args.plot_folder, [args.clip], inputs, "reps")[0]
     seq = load_recording(args.clip, args.asf, args.fps)
-    check_person(seq, "count")  # as segment refuses it: a long one is not counted whole
+    check_person(seq, "count", arms=True)  # as segment refuses it: a long one is not counted whole
     note_assumed_rates(assumed_rates([seq]))
     note_low_rate(seq.source, seq.fps, seq.confidence is not None)
+    if arms_alone(seq):
+        print(
+            f"note: {shown(args.clip)}: the hips are seen in no frame (out of view): counted"
+            " from the arms alone",
+            file=sys.stderr,
+        )
     result = _count(seq)
     if result.partial:
         print(

@@ -1,0 +1,97 @@
+"""Session 52, task G: arm exercises filmed close up, the hips and legs out of the picture (a
+physiotherapist's phone, a patient seated): the repetitions counted from the arms alone, and
+the user told so, where such a clip was refused as showing no person."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from features.datasets import load_clip
+from features.poses import PoseSequence, save_pose
+from features.repetitions import count_repetitions
+from features.skeleton import JOINT_INDEX
+from posecbr.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
+FIXTURE = ROOT / "tests" / "fixtures" / "repetition_counts.json"
+TWO_PEOPLE = "edge/jumping_jack_two_people_pexels8402086.mp4"
+BELOW_THE_WAIST = [
+    i for n, i in JOINT_INDEX.items() if n.split("_", 1)[-1] in {"hip", "knee", "ankle", "heel"}
+] + [JOINT_INDEX[f"{s}_foot_index"] for s in ("left", "right")]
+
+
+def _hips_out(seq: PoseSequence) -> PoseSequence:
+    """``seq`` (canonical) with the hips and everything below them missing in every frame, as
+    ``extract`` stores joints the pose model places below a frame's bottom edge."""
+    p = seq.positions.copy()
+    p[:, BELOW_THE_WAIST] = np.nan
+    return dataclasses.replace(seq, positions=p)
+
+
+def test_shoulder_abductions_with_the_hips_out_of_view_are_counted() -> None:
+    """UI-PRMD's standing shoulder abduction (one file, one repetition: the dataset's own
+    cut), three of subject 1 in a row with the hips and legs missing: 3, from the arms (the
+    upper arm's angle from straight down; the arm stays straight, so the elbow tells
+    nothing). It was refused: "shows no person (no frame with a torso)"."""
+    clips = [load_clip(DEMO / f"m07_s01_e0{e}.npz").to_canonical() for e in (1, 2, 3)]
+    joined = dataclasses.replace(clips[0], positions=np.concatenate([c.positions for c in clips]))
+    result = count_repetitions(_hips_out(joined))
+    assert result.count == 3
+    assert set(result.moving) <= {"left_arm_raise", "right_arm_raise", "left_elbow", "right_elbow"}
+    # each repetition lies within its own file's frames
+    ends = np.cumsum([c.n_frames for c in clips])
+    starts = ends - [c.n_frames for c in clips]
+    for r, a, b in zip(result.repetitions, starts, ends, strict=True):
+        assert a <= r.peak_frame < b
+
+
+@pytest.fixture(scope="module")
+def jumping_jacks(bundled_poses: Callable[[str], PoseSequence]) -> PoseSequence:
+    """The two-people jumping-jack video's tracked person, as extract finds her (estimated
+    once in the session, other files read it), then with the hips and legs out of view."""
+    return _hips_out(bundled_poses(TWO_PEOPLE).to_canonical())
+
+
+def _hand_count() -> dict[str, object]:
+    clips = json.loads(FIXTURE.read_text(encoding="utf-8"))["clips"]
+    return next(c for c in clips if c["source"].endswith(TWO_PEOPLE.split("/")[-1]))
+
+
+def test_jumping_jacks_with_the_hips_out_of_view_match_the_hand_count(
+    jumping_jacks: PoseSequence,
+) -> None:
+    """Six by hand (arms up at 1.25, 2.9, 4.65, 6.35, 8.2 and 9.9 s), counted from the arms."""
+    hand = _hand_count()
+    result = count_repetitions(jumping_jacks)
+    assert result.count == hand["count"] == 6
+    ups = [r.peak_frame / jumping_jacks.fps for r in result.repetitions]
+    np.testing.assert_allclose(ups, [1.25, 2.9, 4.65, 6.35, 8.2, 9.9], atol=0.4)
+
+
+def test_reps_says_once_that_it_counted_the_arms_alone(
+    bundled_poses: Callable[[str], PoseSequence],
+    jumping_jacks: PoseSequence,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Said on stderr, once, for the clip without hips; not for the whole-body one."""
+    poses = save_pose(jumping_jacks, tmp_path / "close_up.npz")
+    assert main(["reps", str(poses), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["count"] == 6
+    notes = [line for line in err.splitlines() if "hips" in line]
+    assert notes == [
+        f"note: {poses}: the hips are seen in no frame (out of view): counted from the arms alone"
+    ]
+    whole = save_pose(bundled_poses(TWO_PEOPLE), tmp_path / "whole.npz")
+    assert main(["reps", str(whole)]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith(f"{whole}: 6 repetitions")
+    assert "hips" not in err
