@@ -4,8 +4,11 @@ the user told so, where such a clip was refused as showing no person."""
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
+import threading
+import types
 from collections.abc import Callable
 from pathlib import Path
 
@@ -13,10 +16,12 @@ import numpy as np
 import pytest
 
 from features.datasets import load_clip
+from features.errors import DataError
 from features.poses import PoseSequence, save_pose
 from features.repetitions import count_repetitions
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
+from posecbr.commands.watch import Watcher
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
@@ -95,3 +100,47 @@ def test_reps_says_once_that_it_counted_the_arms_alone(
     out, err = capsys.readouterr()
     assert out.startswith(f"{whole}: 6 repetitions")
     assert "hips" not in err
+
+
+def _watcher(fps: float) -> Watcher:
+    """A ``watch`` of a video file, its segmenter stood in for by its frame rate alone."""
+    w = Watcher(None, None, argparse.Namespace(source="close_up.mp4", max_frames=None, k=None), fps)
+    w.live = types.SimpleNamespace(fps=fps)
+    w.is_file = True
+    return w
+
+
+def test_watch_says_once_when_the_hips_go_out_of_view(
+    jumping_jacks: PoseSequence, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The jumping jacks without hips, frame by frame as ``watch`` pushes them: said once, when
+    the shoulders have been seen without the hips for a second (25 frames at 25 fps), from
+    the first frame; never while the hips are seen (the whole video's own frames first)."""
+    assert jumping_jacks.fps == 25.0
+    w = _watcher(jumping_jacks.fps)
+    for frame in jumping_jacks.positions:
+        w._hips(frame)
+        w.n += 1
+        if w.n == 24:  # one frame short of a second: nothing said yet
+            assert capsys.readouterr().err == ""
+    assert capsys.readouterr().err.splitlines() == [
+        "note: close_up.mp4: the hips are out of view from 0.00 s (the shoulders are seen): no"
+        " activity is labelled without the torso, and a stretch without it is given as nobody"
+        " in view"
+    ]
+
+
+def test_watch_names_the_hips_when_no_frame_showed_the_torso() -> None:
+    """A video watched to its end, every segment nobody in view: with the shoulders seen and
+    the hips not, the refusal says so; with nobody at all, as before."""
+    for no_hips, said in [
+        (True, "with no torso in any of them (the hips out of view): no activity to label"),
+        (False, "with nobody in view in any of them: no activity to label"),
+    ]:
+        w = _watcher(25.0)
+        w.live, w.emitted, w.n, w.no_hips = None, 1, 250, no_hips
+        with pytest.raises(DataError) as caught:
+            w.close(threading.Event())
+        assert str(caught.value).endswith(
+            f"close_up.mp4: the stream ended after 250 frames (10.00 s) {said}"
+        ), str(caught.value)

@@ -686,6 +686,9 @@ class Watcher:
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
         self.seen = False  # a segment printed saw the person (not nobody in view throughout)
+        self.hips_out = 0  # frames in a row showing the shoulders, not the hips (:meth:`_hips`)
+        self.said_hips_out = False  # the note that the hips are out of view is said once
+        self.no_hips = False  # a frame showed the shoulders without the hips
         self.is_file = False  # a video file (here or served), not a camera or live stream
         self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency = Latencies()  # frame to label, tallied: bounded on any stream
@@ -835,6 +838,7 @@ class Watcher:
             finished = self.live.push(world, visibility, absent, image)
             if self.live.jumped and not self.replaying:  # said when it was first taken
                 self._note_jump()
+            self._hips(world)
             self.n += 1
             for segment in finished:
                 self._emit(segment)
@@ -934,6 +938,31 @@ class Watcher:
 
         words = jump_words(self.args.source, [self.n], self.live.fps)
         print(f"note: {shown(words)}", file=sys.stderr)
+
+    def _hips(self, world: Any) -> None:
+        """Say once, on stderr, that the hips are out of view when the shoulders have been seen
+        without them for :data:`cbr.segmentation.MIN_SEGMENT_S` (a camera close up, the
+        patient seated): without the torso no activity is labelled, and such a stretch is
+        given as nobody in view, which alone told the user nothing of why."""
+        import numpy as np
+
+        from cbr.segmentation import MIN_SEGMENT_S
+        from features.skeleton import JOINT_INDEX
+
+        joints = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
+        seen = np.isfinite(world[[JOINT_INDEX[j] for j in joints]]).all(axis=1)
+        self.hips_out = self.hips_out + 1 if seen[:2].all() and not seen[2:].all() else 0
+        self.no_hips = self.no_hips or self.hips_out > 0
+        if self.said_hips_out or self.hips_out < MIN_SEGMENT_S * self.live.fps:
+            return
+        self.said_hips_out = True
+        start_s = (self.n + 1 - self.hips_out) / self.live.fps
+        print(
+            f"note: {shown(self.args.source)}: the hips are out of view from {start_s:.2f} s"
+            " (the shoulders are seen): no activity is labelled without the torso, and a"
+            " stretch without it is given as nobody in view",
+            file=sys.stderr,
+        )
 
     def _emit(self, segment: Any) -> None:
         from cbr.segmentation import NO_FRAMES, NOBODY
@@ -1092,9 +1121,10 @@ class Watcher:
             # a video with nobody in it, as segment and reps refuse it (a camera watching an
             # empty room is no bad input: its segments say nobody in view); its segments
             # were printed as they finished, as every segment is
+            nobody = "no torso in any of them (the hips out of view)" if self.no_hips else None
             said = (
-                f"after {counted(self.n, 'frame')}{seconds} with nobody in view in any of them:"
-                " no activity to label"
+                f"after {counted(self.n, 'frame')}{seconds} with"
+                f" {nobody or 'nobody in view in any of them'}: no activity to label"
             )
         if said is not None:
             if stop.is_set():
