@@ -21,6 +21,7 @@ from features.poses import PoseSequence, save_pose
 from features.repetitions import count_repetitions
 from features.skeleton import JOINT_INDEX
 from posecbr.cli import main
+from posecbr.commands.extract import out_of_view
 from posecbr.commands.watch import Watcher
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,3 +145,27 @@ def test_watch_names_the_hips_when_no_frame_showed_the_torso() -> None:
         assert str(caught.value).endswith(
             f"close_up.mp4: the stream ended after 250 frames (10.00 s) {said}"
         ), str(caught.value)
+
+
+def test_extract_says_which_parts_were_out_of_view(
+    bundled_poses: Callable[[str], PoseSequence], jumping_jacks: PoseSequence
+) -> None:
+    """``extract``'s line: the parts missing in the frames that show the person, with their
+    share of those frames. The whole video's tracked person is seen whole in every frame:
+    nothing said; with the hips and legs out of view in all 250 and a wrist in the first 50
+    as well: 100 % each and 50 / 250 = 20 %."""
+    whole = bundled_poses(TWO_PEOPLE).to_canonical()
+    nobody = np.isnan(whole.positions).all(axis=(1, 2))
+    assert not nobody.any() and not np.isnan(whole.positions).any()
+    assert out_of_view(whole, nobody) == ""
+    p = jumping_jacks.positions.copy()
+    p[:50, JOINT_INDEX["left_wrist"]] = np.nan
+    close_up = dataclasses.replace(jumping_jacks, positions=p)
+    assert out_of_view(close_up, nobody) == (
+        "; out of view in the frames with a person: wrists 20 %, hips 100 %, knees 100 %,"
+        " ankles 100 %, feet 100 %"
+    )
+    # frames with nobody in view are not counted: the wrist's 50 frames among them, none
+    assert out_of_view(close_up, np.arange(250) < 50).startswith(
+        "; out of view in the frames with a person: hips 100 %"
+    )

@@ -801,12 +801,58 @@ def process(job: Job, options: Options) -> Outcome:
         # a row inside a gap has no frame at all, not a frame without a person
         nobody = np.isnan(seq.positions).all(axis=(1, 2)) & ~gap_rows(seq)
         n_missing = int(nobody.sum())
-        detail = f"{_frames_at(seq, video_frames)}, {n_missing} without a person{vfr_note}"
+        unseen = out_of_view(seq, nobody | gap_rows(seq))
+        detail = f"{_frames_at(seq, video_frames)}, {n_missing} without a person{unseen}{vfr_note}"
         if up_to_date:
             return "drawn", job.out, f"up to date, {detail}; its overlay drawn"
         return "done", job.out, f"{detail}; {STALE_VFR}" if stale else detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
+
+
+BODY_PARTS: dict[str, tuple[str, ...]] = {
+    "face": ("nose", "eye", "ear", "mouth"),
+    "shoulders": ("shoulder",),
+    "elbows": ("elbow",),
+    "wrists": ("wrist",),
+    "hands": ("pinky", "index", "thumb"),
+    "hips": ("hip",),
+    "knees": ("knee",),
+    "ankles": ("ankle",),
+    "feet": ("heel", "foot_index"),
+}
+"""The body's parts, head to feet, as :func:`out_of_view` names them, each by what its
+landmarks' names (``features.skeleton.JOINT_INDEX``) hold (``foot_index`` before ``index``)."""
+
+
+def out_of_view(seq: PoseSequence, nobody: np.ndarray) -> str:
+    """What the pose file ``seq`` (extracted: canonical) lacks in the frames that show the
+    person (not ``nobody`` ``(frames,)``), in words for ``extract``'s line: each body part
+    (:data:`BODY_PARTS`) with a landmark missing in some of them, and in what share ("; out of
+    view in the frames with a person: hips 100 %, knees 100 %, ankles 100 %, feet 100 %"); ""
+    when none is. A landmark
+    the model placed outside the frame is stored missing (``--keep-outside`` aside), so this
+    says once, plainly, what the camera did not show: a phone close up, the legs below its
+    edge (before, only the files' NaN said so, and `describe` listed fluents "unavailable")."""
+    import numpy as np
+
+    from features.skeleton import JOINT_INDEX
+
+    seen = np.flatnonzero(~nobody)
+    if not len(seen):
+        return ""
+    missing = np.isnan(seq.positions[seen]).any(axis=2)  # (frames with a person, 33)
+    said = []
+    for part, marks in BODY_PARTS.items():
+        cols = [
+            i
+            for name, i in JOINT_INDEX.items()
+            if any(m in name for m in marks) and not (part == "hands" and "foot" in name)
+        ]
+        share = float(missing[:, cols].any(axis=1).mean())
+        if share > 0:
+            said.append(f"{part} {'<1' if share < 0.005 else f'{100 * share:.0f}'} %")
+    return f"; out of view in the frames with a person: {', '.join(said)}" if said else ""
 
 
 def _frames_at(seq: PoseSequence, video_frames: np.ndarray | None) -> str:
