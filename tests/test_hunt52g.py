@@ -112,20 +112,23 @@ def _watcher(fps: float) -> Watcher:
 
 
 def test_watch_says_once_when_the_hips_go_out_of_view(
-    jumping_jacks: PoseSequence, capsys: pytest.CaptureFixture[str]
+    bundled_poses: Callable[[str], PoseSequence],
+    jumping_jacks: PoseSequence,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """The jumping jacks without hips, frame by frame as ``watch`` pushes them: said once, when
-    the shoulders have been seen without the hips for a second (25 frames at 25 fps), from
-    the first frame; never while the hips are seen (the whole video's own frames first)."""
+    """Frame by frame as ``watch`` pushes them: the whole video's first 2 s (the hips seen:
+    nothing said), then the jumping jacks without hips: said once, when the shoulders have
+    been seen without the hips for a second (25 frames at 25 fps), from 2.00 s."""
     assert jumping_jacks.fps == 25.0
+    whole = bundled_poses(TWO_PEOPLE).to_canonical().positions[:50]
     w = _watcher(jumping_jacks.fps)
-    for frame in jumping_jacks.positions:
+    for frame in [*whole, *jumping_jacks.positions]:
         w._hips(frame)
         w.n += 1
-        if w.n == 24:  # one frame short of a second: nothing said yet
+        if w.n in (50, 74):  # the hips seen; then one frame short of a second without them
             assert capsys.readouterr().err == ""
     assert capsys.readouterr().err.splitlines() == [
-        "note: close_up.mp4: the hips are out of view from 0.00 s (the shoulders are seen): no"
+        "note: close_up.mp4: the hips are out of view from 2.00 s (the shoulders are seen): no"
         " activity is labelled without the torso, and a stretch without it is given as nobody"
         " in view"
     ]
