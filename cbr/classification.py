@@ -191,9 +191,12 @@ def _classification(
     )
 
 
-def _solve(
-    stored: StoredClassifier, clip: PoseSequence, truth: str | None, target: str
+def classify_clip(
+    stored: StoredClassifier, clip: PoseSequence, truth: str | None, target: str = "label"
 ) -> Classification:
+    """One clip classified and explained as :func:`classify_clips` classifies each, without
+    a progress bar (``watch --split repetitions``: a stream's repetitions, one as each
+    finishes)."""
     clf = stored.classifier
     return _classification(clf, clip, truth, _solve_one(clf, clip), target)
 
@@ -368,13 +371,13 @@ def _feedback(
     learnt: list[str],
 ) -> Classification:
     """One clip of :func:`classify_with_feedback`: classified, then learnt from."""
-    c = _solve(stored, clip, truth, target)
+    c = classify_clip(stored, clip, truth, target)
     if c.solved is not None:
         try:
             dec, rev = _learn(store, stored, clip, c.solved, label, settings, learnt)
         except StaleCaseError:  # a case changed under us: read again, decide again
             stored = _reload(store, stored)
-            c = _solve(stored, clip, truth, target)
+            c = classify_clip(stored, clip, truth, target)
             assert c.solved is not None
             dec, rev = _learn(store, stored, clip, c.solved, label, settings, learnt)
         c = Classification(

@@ -1109,6 +1109,24 @@ class LiveSegmenter:
             raise InputError("recent: no frame has been pushed yet", self.source)
         return self._sequence(max(self.offset, self.n - int(frames)), self.n)
 
+    def clip(self, start: int, end: int) -> PoseSequence:
+        """Stream frames [start, end) as a clip cut from the stream, as ``classify --split
+        repetitions`` cuts a piece of a recording (its ``frame_offset`` ``start``): a
+        repetition of :meth:`repetitions_from` to judge. Frames no longer kept, or an empty
+        range, are refused (DataError)."""
+        return self._sequence(start, end).with_metadata(frame_offset=int(start))
+
+    def repetitions_from(self, start: int) -> tuple[tuple[int, int], ...]:
+        """The frames [start, end) of each repetition counted in the stream frames from
+        ``start`` (those still kept) to the last pushed, counted as ``segment`` counts a
+        stretch cut there (:meth:`_in_context`: with the frames either side as context, the
+        stream's start and, once it has ended, its end as a recording's), whatever the
+        segments: the count ``watch --split repetitions`` judges, as ``classify --split
+        repetitions`` counts a whole recording. The last may be one still in progress
+        (its end where the frames end)."""
+        reps = self._count_kept(start, self.n, (False, False))
+        return tuple((int(r.start_frame), int(r.end_frame)) for r in reps)
+
     def _sequence(self, a: int, b: int) -> PoseSequence:
         """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped)."""
         if a < self.offset or b <= a:

@@ -810,7 +810,7 @@ def load_case_base(db: str, name: str | None) -> Any:
         store.close()
 
 
-def note_not_windows(stored: Any, db: str, command: str) -> None:
+def note_not_windows(stored: Any, db: str, command: str, each: bool = False) -> None:
     """Note, on stderr, a case base whose cases are whole clips or repetitions (``train``
     without ``--split`` or ``--split repetitions``; its model records it): ``command``
     (``segment``, ``watch``) classifies 2-s windows, which such cases answer far worse, and
@@ -828,6 +828,15 @@ def note_not_windows(stored: Any, db: str, command: str) -> None:
         "repetitions": "CMU 13_31 against 13_29 and 13_30: 81 % of its 0.1-s blocks "
         "segmented right, against 94 %",
     }
+    if command == "watch" and is_repetition_check(stored.classifier):
+        if not each:  # --split repetitions: each repetition judged by the case base as trained
+            print(
+                f"note: case base {stored.name!r} of {shown_db(db)} predicts {stored.target!r},"
+                " not activities: watch labels 2-s windows with it; to judge and explain each"
+                " repetition as it finishes: add --split repetitions",
+                file=sys.stderr,
+            )
+        return
     if command == "segment" and is_repetition_check(stored.classifier):
         print(
             f"note: case base {stored.name!r} of {shown_db(db)} predicts {stored.target!r}, "

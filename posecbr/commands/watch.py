@@ -15,7 +15,14 @@ One JSON line per finished segment goes to stdout, as it finishes (``start_s``, 
 ``repetitions`` gives it too), as ``posecbr segment --json`` gives them); a segment's line
 comes once the decoders have settled it, seconds after its end, and the first segment's,
 when it has no whole repetition of its own, once the first repetition after it is known
-(:meth:`cbr.live.LiveSegmenter._judge_held`). At
+(:meth:`cbr.live.LiveSegmenter._judge_held`). With
+``--split repetitions`` each repetition is judged too, as ``classify --split repetitions``
+judges it (:mod:`cbr.live_verdicts`: counted over the stream, not per segment; judged alone
+by the case base once the next one is counted and 0.5 s has passed, given once and never
+revised), one JSON line each on stdout as it is judged: ``repetition`` (its number),
+``start_s``, ``end_s`` and ``classify --json``'s record of the piece (``start_frame``,
+``end_frame``, ``label``: the verdict, ``confidence``, ``text``: its explanation, ...); the
+last verdict is drawn on the frames, and the end lists every verdict on stderr. At
 the end the latency from a frame's coming to having its rolling label (drawn on the frame,
 not the JSON lines) is printed on stderr (median,
 95th percentile, worst): a file's frame played at its own rate comes when it is due, as a
@@ -114,6 +121,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         type=int,
         metavar="N",
         help="stop after this many frames (default: no limit)",
+    )
+    p.add_argument(
+        "--split",
+        choices=("segments", "repetitions"),
+        default="segments",
+        help="repetitions: also judge and explain each repetition as it finishes with the case"
+        " base (e.g. one trained with --target correct: correct or incorrect), as classify"
+        " --split repetitions judges each, one JSON line each beside the segments' (default:"
+        " segments alone)",
     )
     p.add_argument(
         "--json",
@@ -593,7 +609,8 @@ def run(args: argparse.Namespace) -> int:
     )
     halt = pacer.stop if pacer is not None else threading.Event()  # set by Ctrl-C, SIGTERM
     frames = frames_in_background(poses, args.stall, pacer, args.source, alive, halt, estimator)
-    watcher = Watcher(clf, judge, args, fps)
+    each = stored if args.split == "repetitions" else None  # judges each repetition
+    watcher = Watcher(clf, judge, args, fps, each)
     watcher.pacer = pacer
     try:
         with (
@@ -623,7 +640,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"video written to {shown(args.out)}", file=sys.stderr)
         # at the end of a watch that went well: a stream refused on the way (cut short,
         # stalled) is one line
-        note_not_windows(stored, args.db, "watch")
+        note_not_windows(stored, args.db, "watch", args.split == "repetitions")
     except _NoFrameDrawn:
         pass  # stopped before the first frame: no video, not an empty one
     finally:  # the video in place (or not to be written): its copy for a kill is not needed
@@ -675,10 +692,19 @@ def _video_output(out: Path | None) -> Iterator[Path | None]:
 class Watcher:
     """Feeds frames to the live segmenter, draws, writes, prints and times them."""
 
-    def __init__(self, clf: Any, judge: Any, args: argparse.Namespace, fps: float | None) -> None:
+    def __init__(
+        self,
+        clf: Any,
+        judge: Any,
+        args: argparse.Namespace,
+        fps: float | None,
+        stored: Any = None,
+    ) -> None:
         self.clf, self.judge, self.args = clf, judge, args
+        self.stored = stored  # the case base that judges each repetition (--split repetitions)
         self.fps = fps
         self.live: Any = None
+        self.verdicts: Any = None  # cbr.live_verdicts.RepetitionVerdicts, --split repetitions
         self._grid: Any = None  # Regrid, made with the segmenter
         self.writer: Any = None  # features.pose_estimation.recording.Recording
         self.video: Path | None = None  # the MP4 the drawn frames go to (a temporary file)
@@ -732,8 +758,7 @@ class Watcher:
             self.follow(frames, is_file, stop)
         except StreamLost:
             self._flush()
-            for segment in self.live.finish() if self.live is not None else []:
-                self._emit(segment)
+            self._finish()
             raise
         finally:
             if self.writer is not None:  # kept until the video is in place (:meth:`drop_rescue`)
@@ -775,6 +800,7 @@ class Watcher:
 
         fps = float(self.fps or 0.0)
         self.live = LiveSegmenter(self.clf, fps, self.judge, self.args.source, k=self.args.k)
+        self._judge_repetitions()
         self._grid = Regrid(fps, self.args.source)
         if waiting:
             self.kept, self._grid.remakable = [], True
@@ -842,6 +868,9 @@ class Watcher:
             self.n += 1
             for segment in finished:
                 self._emit(segment)
+            if self.verdicts is not None:
+                for verdict in self.verdicts.update():
+                    self._print_line(verdict.to_dict(self.live.fps))
             self._draw(shown_frame, absent)
 
     def _flush(self) -> None:
@@ -896,6 +925,7 @@ class Watcher:
         )
         self.fps = fps
         self.live = LiveSegmenter(self.clf, fps, self.judge, self.args.source, k=self.args.k)
+        self._judge_repetitions()
         self._grid = Regrid(fps, self.args.source, interval=1.0 / before)
         self.n = 0
         if self.writer is not None:  # its frames drawn again, at the new rate
@@ -964,15 +994,41 @@ class Watcher:
             file=sys.stderr,
         )
 
+    def _judge_repetitions(self) -> None:
+        """Given the case base to judge each repetition with (``--split repetitions``:
+        :attr:`stored`), judge the repetitions of the segmenter just made
+        (:class:`cbr.live_verdicts.RepetitionVerdicts`); a stream watched again from its
+        start (:meth:`_remake`) keeps the verdicts given so far, counting on from the end of
+        the last one judged."""
+        if self.stored is None:
+            return
+        from cbr.live_verdicts import RepetitionVerdicts
+
+        self.verdicts = RepetitionVerdicts(self.stored, self.live, self.verdicts)
+
+    def _finish(self) -> None:
+        """The stream has ended: the segments not yet given, and (``--split repetitions``)
+        the verdicts of the repetitions not yet judged, the last counted among them."""
+        finished = self.live.finish() if self.live is not None else []
+        for segment in finished:
+            self._emit(segment)
+        if self.verdicts is not None:
+            for verdict in self.verdicts.update(ended=True):
+                self._print_line(verdict.to_dict(self.live.fps))
+
     def _emit(self, segment: Any) -> None:
         from cbr.segmentation import NO_FRAMES, NOBODY
 
         self.emitted += 1
         self.seen = self.seen or segment.explanation not in (NOBODY, NO_FRAMES)
+        self._print_line(segment.to_dict(self.fps))
+
+    def _print_line(self, line: dict[str, Any]) -> None:
+        """One JSON line on stdout, flushed (a segment's or a repetition's)."""
         if self.stdout_gone:
             return
         try:
-            print(json.dumps(segment.to_dict(self.fps)), flush=True)
+            print(json.dumps(line), flush=True)
         except BrokenPipeError:  # the program reading the lines has closed them or exited
             stdout_gone()
             self.stdout_gone = True
@@ -1007,6 +1063,11 @@ class Watcher:
             overlay_label(label, key, self._colours()),
             f"repetitions: {current.repetitions if current else 0}",
         ]
+        last = None if self.verdicts is None else self.verdicts.last
+        if last is not None and last.judged.explanation is not None:
+            words.append(
+                f"repetition {last.number}: {last.judged.explanation.text.splitlines()[0]}"
+            )
         if not absent and self.live.nobody_in_view:
             if words[0] == NOBODY and np.isnan(frame.pose.image[:, :2]).all():
                 words = words[1:]  # draw_pose says "no person"
@@ -1108,8 +1169,7 @@ class Watcher:
         watching an empty room may see one): a note says so."""
         from cbr.segmentation import MIN_WINDOW_S
 
-        for segment in self.live.finish() if self.live is not None else []:
-            self._emit(segment)
+        self._finish()
         seconds = f" ({self.n / self.fps:.2f} s)" if self.fps else ""
         said = None
         if not self.emitted:  # as segment refuses a recording shorter than a window
@@ -1147,6 +1207,36 @@ class Watcher:
                 f"95th percentile {1000 * ms(95):.1f} ms, worst {1000 * self.latency.worst:.1f} ms",
                 file=sys.stderr,
             )
+        if self.verdicts is not None:
+            _print_verdicts(self.verdicts.given, self.stored.target, float(self.live.fps))
+
+
+def _print_verdicts(verdicts: list[Any], target: str, fps: float) -> None:
+    """The end of a ``watch --split repetitions``, on stderr: each repetition's verdict, as
+    ``classify --split repetitions`` heads each (the first line of its explanation), and
+    how many got each answer, as its summary counts them."""
+    from collections import Counter
+
+    from cbr.explain import label_words
+
+    for v in verdicts:
+        e = v.judged.explanation
+        said = (
+            e.text.splitlines()[0]
+            if e is not None
+            else f"unclassifiable ({v.judged.unclassifiable})"
+        )
+        print(
+            f"repetition {v.number}, frames {v.start_frame}-{v.end_frame - 1}"
+            f" ({v.start_frame / fps:.1f}-{v.end_frame / fps:.1f} s): {shown(said)}",
+            file=sys.stderr,
+        )
+    answers = Counter(str(v.label) for v in verdicts if v.label is not None)
+    told = ", ".join(f"{shown(label_words(lab, target))} {n}" for lab, n in sorted(answers.items()))
+    print(
+        f"{counted(len(verdicts), 'repetition')} judged" + (f": {told}" if told else ""),
+        file=sys.stderr,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
