@@ -149,3 +149,25 @@ def test_a_verdict_comes_as_its_repetition_finishes_not_at_the_end(
     verdicts = [i for i, line in enumerate(lines) if "repetition" in line]
     assert len(verdicts) == 4
     assert verdicts[:3] == [0, 1, 2] and segments[-1] > 2
+
+
+def test_a_watch_of_a_repetition_check_without_split_points_to_it(
+    session: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``watch`` of a case base trained ``--target correct`` labels 2-s windows correct or
+    incorrect; its note says how each repetition is judged instead (before: that the case
+    base holds a case per clip and how to train one of windows, which would not help a
+    repetition check), and says nothing once ``--split repetitions`` is given."""
+    from posecbr.commands.segment import load_case_base, note_not_windows
+
+    stored = load_case_base(session["db"], None)
+    capsys.readouterr()
+    note_not_windows(stored, session["db"], "watch")
+    err = capsys.readouterr().err
+    assert err.startswith("note: case base 'default' of ") and err.count("\n") == 1
+    assert (
+        "predicts 'correct', not activities: watch labels 2-s windows with it; to judge and"
+        " explain each repetition as it finishes: add --split repetitions\n"
+    ) in err
+    note_not_windows(stored, session["db"], "watch", each=True)
+    assert capsys.readouterr().err == ""

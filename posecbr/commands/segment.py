@@ -817,7 +817,8 @@ def note_not_windows(stored: Any, db: str, command: str, each: bool = False) -> 
     how to train a case base of windows. Said once per command; a case base stored before
     its cases were recorded (``cases`` None) or of windows says nothing. A repetition check
     (``train --target correct``) is noted by ``segment`` instead with how each repetition is
-    judged (``classify --split repetitions``): windows of it would not help."""
+    judged (``classify --split repetitions``): windows of it would not help; by ``watch``
+    with how it judges each (``--split repetitions``), unless it does (``each``)."""
     from casebase_store import shown_db
     from cbr.words import CASE_KINDS
     from features.repetitions import WINDOW_S
