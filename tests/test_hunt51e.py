@@ -235,6 +235,7 @@ class _Segmenter:
     def __init__(self) -> None:
         self.poses: list[float] = []
         self.jumped = False
+        self.fps = 30.0
 
     def push(self, world: Any, visibility: Any, absent: bool, image: Any) -> list[Any]:
         self.poses.append(float(world[0, 0]))
