@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import cbr.unknown
+import cbr.unknown_judges
 from casebase_store import open_store
 from cbr.live import LiveSegmenter
 from cbr.stored import load_classifier
@@ -98,7 +99,7 @@ def test_train_stores_spread_margin_and_an_older_model_calibrates_it_when_asked(
     def no_scan(*args: object, **kwargs: object) -> None:
         raise AssertionError("calibrated at run time")
 
-    monkeypatch.setattr(cbr.unknown, "held_out_activities", no_scan)
+    monkeypatch.setattr(cbr.unknown_judges, "held_out_activities", no_scan)
     assert segmented(trained) == calibrated_now
     assert LiveSegmenter(clf, 30.0).judge == stored
 

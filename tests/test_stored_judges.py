@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import cbr.unknown
+import cbr.unknown_judges
 from casebase_store import NewCase, open_store
 from cbr.segmentation import finish, solve_recording
 from cbr.stored import load_classifier
@@ -184,8 +185,9 @@ def test_segment_answers_the_same_with_the_stored_judge_without_scanning(
     def no_scan(*args: object, **kwargs: object) -> None:
         raise AssertionError("calibrated at run time")
 
-    monkeypatch.setattr(cbr.unknown, "held_out_activities", no_scan)
-    monkeypatch.setattr(cbr.unknown, "_neighbour_distances", no_scan)
+    # the judges calibrate themselves in cbr.unknown_judges (their `of`)
+    monkeypatch.setattr(cbr.unknown_judges, "held_out_activities", no_scan)
+    monkeypatch.setattr(cbr.unknown_judges, "_neighbour_distances", no_scan)
     before = _sha(trained)
     assert _segment(capsys, recording, trained, "margin") == fresh
     assert _sha(trained) == before  # segment writes nothing
