@@ -28,6 +28,7 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cbr.similarity.euclidean as euclidean  # noqa: E402
+import cbr.similarity.grid_codes as grid_codes  # noqa: E402
 from benchmarks import json_out, write_json  # noqa: E402
 from cbr.similarity import Euclidean  # noqa: E402
 
@@ -75,7 +76,7 @@ def run_one(n: int, dims: int, n_queries: int, rng: np.random.Generator) -> dict
     four, build4 = build(m, x, eight_bit=False)
     eight, build8 = build(m, x, eight_bit=True)
     assert isinstance(four.codes, euclidean._Nibbles)
-    assert isinstance(eight.codes, euclidean._PcaCodes)
+    assert isinstance(eight.codes, grid_codes.PcaCodes)
     peer = faiss.IndexFlatL2(dims)
     peer.add(x)
     reps = [m.represent_query(q) for q in queries]

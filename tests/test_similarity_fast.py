@@ -295,7 +295,7 @@ def test_euclidean_quantized_bound_prunes_and_equals_brute_force(kind: str) -> N
 
 
 def test_quantization_error_norm_is_never_below_the_exact_one() -> None:
-    from cbr.similarity.euclidean import _quantize
+    from cbr.similarity.grid_codes import _quantize
 
     rng = np.random.default_rng(2)
     x = (1e6 + rng.random((500, 50)) * 1e3).astype(np.float32)
@@ -376,7 +376,8 @@ def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
     # random walks: leading components hundreds of times wider than the last ones, so the
     # grid gives the narrow dimensions finer steps (several weights); the squared bound of
     # every row against a query, from the kernel, against the distance in extended precision
-    import cbr.similarity.euclidean as euclidean
+    import cbr.similarity.bounded_search as bounded_search
+    from cbr.similarity.grid_codes import BLOCK
 
     rng = np.random.default_rng(8)
     cases = np.cumsum(rng.normal(size=(3000, 90)), axis=1).astype(np.float32)
@@ -384,17 +385,15 @@ def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
     index = Euclidean(prune_min_cases=1000).build_index(cases)
     pca = index.pca
     assert pca is not None and len(set(pca.weights.tolist())) > 1
-    qp, r_q, q_norm = euclidean._project_query(query, pca.mean, pca.basis)
-    qc, qc_sq, e_q = euclidean._grid_codes(qp, pca.base, pca.steps, pca.weights)
-    dots = np.empty(euclidean._BLOCK, dtype=np.int32)
-    lb = np.empty(euclidean._BLOCK, dtype=np.float32)
+    qp, r_q, q_norm = bounded_search._project_query(query, pca.mean, pca.basis)
+    qc, qc_sq, e_q = bounded_search._grid_codes(qp, pca.base, pca.steps, pca.weights)
+    dots = np.empty(BLOCK, dtype=np.int32)
+    lb = np.empty(BLOCK, dtype=np.float32)
     bounds = []
     query32 = (qc_sq, e_q, r_q, pca.step * (1 - 1e-15))
     for b in range(pca.codes.shape[0]):
-        euclidean._block_dots(pca.codes, b, qc, dots)
-        euclidean._block_bounds(
-            dots, pca.code_sq, pca.errs, pca.resid, b * euclidean._BLOCK, query32, lb
-        )
+        bounded_search._block_dots(pca.codes, b, qc, dots)
+        bounded_search._block_bounds(dots, pca.code_sq, pca.errs, pca.resid, b * BLOCK, query32, lb)
         bounds.append(lb.astype(np.float64))
     row = pca.order[: len(cases)]  # the case stored at each place of the codes
     bound = np.empty(len(cases))
@@ -404,11 +403,11 @@ def test_euclidean_pca_codes_bound_never_exceeds_the_distance() -> None:
     assert np.all(bound <= exact.astype(np.float64) + 1e-6 * scale)  # the docstring's claim
     assert np.median(bound / exact.astype(np.float64)) > 0.5  # and a bound that prunes
     # each block's bound (its box of codes and its ball) is under every one of its cases'
-    block_bound, visit = euclidean._block_order(
+    block_bound, visit = bounded_search._block_order(
         pca.kernel_args[2], query, qc, e_q, r_q, pca.step * (1 - 1e-15)
     )
     nearest_in_block = np.minimum.reduceat(
-        exact[row].astype(np.float64), np.arange(0, len(row), euclidean._BLOCK)
+        exact[row].astype(np.float64), np.arange(0, len(row), BLOCK)
     )
     assert np.all(block_bound <= nearest_in_block + 1e-6 * scale)
     assert np.all(np.diff(block_bound[visit]) >= 0)  # blocks visited nearest first

@@ -243,7 +243,7 @@ def _encode(
     """Codes and ``e_x`` of the rows ``part`` ``(c, m)`` float32 (rows ``first`` on, ``first``
     a multiple of 64) into ``codes`` and ``errs``. A value's cell is estimated from the range,
     then moved by exact comparisons with the edges so ``E[c] <= x <= E[c + 1]``. ``e_x`` is
-    the float64 norm of ``x - x_hat``, raised (as :func:`~cbr.similarity.euclidean._quantize`
+    the float64 norm of ``x - x_hat``, raised (as :func:`~cbr.similarity.grid_codes._quantize`
     raises its error norms) above its rounding and then rounded up to float32."""
     m = part.shape[1]
     u = 2.0**-53
