@@ -59,7 +59,11 @@ How (all channels at once, no per-frame loops):
    :data:`ENDS_S`; each end the line's outer tenth of the frames, or of its range where a
    clip mostly at rest has fewer frames there) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
-   side-against-side part, whose peaks are one side's repetitions and troughs the other's;
+   side-against-side part, whose peaks are one side's repetitions and troughs the other's
+   (small wobbles about the symmetric posture between them are none, :func:`_taking_turns`;
+   two of one side that the whole posture does not come back toward rest between are one,
+   :func:`_one_side_out`; one cut off by the clip's start or end counts when it got nearly
+   as far as the whole repetitions left, not the wobbles);
 5. repetitions are the peaks that stand out by at least :data:`SUBSTANTIAL` of the typical
    repetition and by :data:`MIN_EXCURSION_RAD` (more than pose-estimation jitter), from which
    the movement falls back by :data:`RETURN_SHARE` of their height above rest on both sides
@@ -1998,6 +2002,28 @@ def _taking_turns(reach: np.ndarray, sides: np.ndarray, whole: np.ndarray) -> np
     return np.asarray(np.isin(np.arange(len(reach)), kept))
 
 
+def _one_side_out(
+    line: np.ndarray, posture: np.ndarray, far: np.ndarray, sides: np.ndarray, reach: int
+) -> list[list[int]]:
+    """The far points ``far`` (ascending samples of ``line`` ``(n,)``, how far the movement of
+    one side against the other goes out from the symmetric posture) of an alternating
+    movement, on sides ``sides``, grouped into those of one excursion: runs of neighbours of
+    the same side between which the ``posture`` ``(n, C)`` does not come back toward rest
+    (:func:`_posture_stays_out`, rest the symmetric posture the pair left from, sought from
+    the far point before them, or ``reach`` samples before). A side lunge's knees shifting at
+    the bottom of one lunge move the side-against-side line back by half and out again, while
+    the hips stay down: two far points of one side, one repetition."""
+    groups: list[list[int]] = [[0]] if len(far) else []
+    for i in range(1, len(far)):
+        p, q = int(far[i - 1]), int(far[i])
+        since = int(far[i - 2]) if i > 1 else p - reach
+        if sides[i] == sides[i - 1] and _posture_stays_out(line, posture, p, q, since):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
+
+
 def _alternating_repetitions(
     x: np.ndarray,
     names: tuple[str, ...],
@@ -2088,9 +2114,21 @@ def _alternating_repetitions(
     reached[reached] = _whole_only(back[reached], edges)
     order = np.argsort(far[reached], kind="stable")
     far, sides = far[reached][order], sides[reached][order]
-    whole = ~(back[reached][order] < MIN_EXCURSION_RAD).any(axis=1)
+    back = back[reached][order]
+    whole = ~(back < MIN_EXCURSION_RAD).any(axis=1)
     turns = _taking_turns(np.abs(line[far]), sides, whole)
-    far, sides = far[turns], sides[turns]
+    far, sides, back = far[turns], sides[turns], back[turns]
+    # one side's far points the whole posture does not come back toward rest between are
+    # one excursion (a side lunge whose knees shift at the bottom)
+    cycle = int(period * fps) if period else len(line)
+    groups = _one_side_out(np.abs(line), x * np.abs(movement_direction(x)), far, sides, cycle)
+    peak = [g[int(np.argmax(np.abs(line[far[g]])))] for g in groups]
+    back = np.array([[back[g[0], 0], back[g[-1], 1]] for g in groups]).reshape(-1, 2)
+    far, sides = far[peak], sides[peak]
+    # a far point cut off at the clip's start or end against the whole repetitions left, not
+    # the wobbles taken out (whose median let a wobble cut off at the end count)
+    kept = _reached(np.abs(line[far]), back)
+    far, sides = far[kept], sides[kept]
     moved = _in_view(far, blind)
     once = np.diff(moved, prepend=-1) > 0  # two far points moved onto one sample: one
     far, sides = moved[once], sides[once]
