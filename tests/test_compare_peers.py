@@ -66,11 +66,13 @@ def test_spawned_fold_workers_give_the_tslearn_peer_the_serial_predictions(
     from features.datasets import load_dataset
 
     demo = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
-    labels = "deep_squat,standing_shoulder_abduction"
+    labels, subjects = "deep_squat,standing_shoulder_abduction", "s01,s02"
     out = tmp_path / "j2.json"
+    # two subjects: two folds, one for each of the two workers (the demo's third subject
+    # was a third fold and a half more DTW for the peer, the same check)
     cmd = [
         sys.executable, "-m", "posecbr", "compare", str(demo), "--labels", labels,
-        "--similarities", "euclidean", "--features", "fluents", "--no-dad",
+        "--subjects", subjects, "--similarities", "euclidean", "--features", "fluents", "--no-dad",
         "--peers", "dtw-knn", "--explain", "0", "--jobs", "2", "--json", str(out),
     ]  # fmt: skip
     env = {**os.environ, "POSECBR_NO_PROGRESS": "1"}
@@ -81,7 +83,8 @@ def test_spawned_fold_workers_give_the_tslearn_peer_the_serial_predictions(
         similarities=("euclidean",), features=("fluents",), dad=False, peers=("dtw-knn",),
         explain=0, jobs=1,
     )  # fmt: skip
-    clips = load_dataset(demo, labels=set(labels.split(",")))
+    clips = load_dataset(demo, labels=set(labels.split(",")), subjects=set(subjects.split(",")))
+    assert len(clips) == 24  # 2 movements x 2 subjects x 6 clips
     serial = run_compare(clips, settings, source=str(demo)).results
     assert [m.name for m in serial.methods] == ["cbr fluents/euclidean", "dtw-knn"]
     for m in serial.methods:
