@@ -18,6 +18,10 @@ from features.poses import PoseSequence, load_pose
 DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 
 
+# on one xdist worker: the module's squats_and_steps, fitted, numbered made once
+pytestmark = pytest.mark.xdist_group("api22")
+
+
 @pytest.fixture(scope="module")
 def squats_and_steps() -> tuple[list[PoseSequence], list[str]]:
     """Every third deep squat and hurdle step of the demo data: clips and labels."""

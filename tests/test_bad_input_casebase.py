@@ -36,6 +36,10 @@ def _one_line_error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
     return err
 
 
+# on one xdist worker: the module's trained made once, not once per worker
+pytestmark = pytest.mark.xdist_group("bad_input_casebase")
+
+
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
     db = tmp_path_factory.mktemp("cb") / "cb.sqlite"

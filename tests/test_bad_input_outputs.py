@@ -65,6 +65,10 @@ def test_describe_plot_is_written_whole_in_the_format_of_its_name(
     assert not list(tmp_path.glob(".*"))  # no temporary file left behind
 
 
+# on one xdist worker: the module's case_base made once, not once per worker
+pytestmark = pytest.mark.xdist_group("bad_input_outputs")
+
+
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return small_case_base(tmp_path_factory.mktemp("cb"))

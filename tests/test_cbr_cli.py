@@ -21,6 +21,10 @@ def _write_classes(root: Path, n_per_class: int, seed: int) -> Path:
     return root
 
 
+# on one xdist worker: the module's dataset made once, not once per worker
+pytestmark = pytest.mark.xdist_group("cbr_cli")
+
+
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     base = tmp_path_factory.mktemp("cli")

@@ -18,6 +18,10 @@ from tests.test_cbr_clips import ACTIVITIES, arm_dataset
 cache_tslearn_kernels()
 
 
+# on one xdist worker: the module's data made once, not once per worker
+pytestmark = pytest.mark.xdist_group("cbr_estimator")
+
+
 @pytest.fixture(scope="module")
 def data() -> tuple[list, np.ndarray, list, np.ndarray]:
     X, y = arm_dataset(8, seed=1)

@@ -69,6 +69,10 @@ def test_a_hand_built_imbalanced_case_base_answers_by_balanced_vote() -> None:
     np.testing.assert_allclose(balanced.proba, np.array([0.6 * c, 3 * i]) / (0.6 * c + 3 * i))
 
 
+# on one xdist worker: the module's squats made once, not once per worker
+pytestmark = pytest.mark.xdist_group("class_balance")
+
+
 @pytest.fixture(scope="module")
 def squats() -> CaseBaseClassifier:
     """Ten deep squats labelled correct (depth 0.90-0.99), two shallow ones incorrect."""

@@ -77,6 +77,10 @@ def test_a_column_convert_writes_itself_is_refused(
     refused(argv, tmp_path, capsys, "labels.csv", repr(column), needle, "rename the column")
 
 
+# on one xdist worker: the module's fitted, correct_db made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt27b")
+
+
 @pytest.fixture(scope="module")
 def fitted() -> tuple[CaseBaseClassifier, list[object]]:
     X, y = arm_dataset(3, 5)

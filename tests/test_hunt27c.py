@@ -37,6 +37,10 @@ def _cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]
     return code, out, err
 
 
+# on one xdist worker: the module's clips, results made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt27c")
+
+
 @pytest.fixture(scope="module")
 def clips(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Synthetic arm movements: three activities, two clips each."""

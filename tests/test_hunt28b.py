@@ -319,6 +319,10 @@ def test_relabelling_a_case_trimmed_meanwhile_is_refused_as_stale(tmp_path: Path
 # ---- the Python API ------------------------------------------------------------------------
 
 
+# on one xdist worker: the module's fitted made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt28b")
+
+
 @pytest.fixture(scope="module")
 def fitted() -> tuple[CaseBaseClassifier, list[object]]:
     X = [clip("squat", seconds=s) for s in (3, 4)] + [clip("jumping_jack", seconds=s)

@@ -36,6 +36,9 @@ from tests.badinput import refused, snapshot, standing_clip
 from tests.test_cbr_clips import arm_dataset
 from tests.test_json_hunt import strict
 
+# on one xdist worker: the module's one_recording_each made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt31c")
+
 
 @pytest.fixture(scope="module")
 def one_recording_each(tmp_path_factory: pytest.TempPathFactory) -> Path:

@@ -143,6 +143,10 @@ def test_compare_refuses_a_model_per_subject_under_leave_one_subject_out(
     assert "no model" in line
 
 
+# on one xdist worker: the module's per_movement made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt31e")
+
+
 @pytest.fixture(scope="module")
 def per_movement(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, object], str]:
     """A comparison with one model per movement (one activity each): the results document

@@ -30,6 +30,10 @@ def _held(seq: PoseSequence, frame: int, seconds: float, seed: int, jitter_m: fl
     )
 
 
+# on one xdist worker: the module's held_postures made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt33g")
+
+
 @pytest.fixture(scope="module")
 def held_postures(shared_data: Path) -> tuple[PoseSequence, object]:
     """CMU 13_29 and a classifier of ``train --split windows`` over three of its postures

@@ -19,6 +19,9 @@ from posecbr.cli import main
 from tests.badinput import refused, small_case_base
 from tests.test_cbr_cli import _write_classes
 
+# on one xdist worker: the module's clips, case_base made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt34c")
+
 
 @pytest.fixture(scope="module")
 def clips(tmp_path_factory: pytest.TempPathFactory) -> Path:

@@ -34,6 +34,10 @@ NOBODY = "with nobody in view in any of them: no activity to label\n"
 """How ``watch`` ends a video file read to its end with nobody in view (hunt 45u)."""
 
 
+# on one xdist worker: the module's case_base, self_signed made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt34h")
+
+
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return small_case_base(tmp_path_factory.mktemp("cb"))

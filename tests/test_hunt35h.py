@@ -30,6 +30,10 @@ DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 ACTIVITIES = ("deep_squat", "hurdle_step", "standing_shoulder_abduction")
 
 
+# on one xdist worker: the module's arrays, in_memory, two_activities made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt35h")
+
+
 @pytest.fixture(scope="module")
 def arrays() -> tuple[list[PoseSequence], list[str]]:
     """Every third clip of three demo activities, as a tracker's arrays: no source, no

@@ -67,6 +67,10 @@ def test_write_store_still_creates_the_file(tmp_path: Path) -> None:
         assert store.list_case_bases() == []
 
 
+# on one xdist worker: the module's squats, stored_check made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt35l")
+
+
 @pytest.fixture(scope="module")
 def squats() -> tuple[list[PoseSequence], list[str]]:
     """The demo's 18 deep squats (9 correct, 9 incorrect) with their ``correct`` column as

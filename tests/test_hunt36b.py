@@ -47,6 +47,10 @@ def _share(result: dict[str, Any]) -> float:
     return votes[result["label"]] / sum(votes.values())
 
 
+# on one xdist worker: the module's one_recording_each, three_people made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt36b")
+
+
 @pytest.fixture(scope="module")
 def one_recording_each(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A case base of two activities, each one recording of three squats (deep, shallow), no

@@ -88,6 +88,10 @@ def test_a_ts_file_in_a_folder_is_a_clip_only_when_it_is_mpeg_ts(
     assert sorted(p.name for p in (tmp_path / "poses").iterdir()) == ["clip.npz"]
 
 
+# on one xdist worker: the module's lunge_gap, squat_loops made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt36c")
+
+
 @pytest.fixture(scope="module")
 def lunge_gap(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The reverse lunge's first 120 frames at a quarter size, 25 fps, lossless (FFV1 in

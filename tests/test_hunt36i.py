@@ -89,6 +89,10 @@ def test_reps_gives_no_period_when_nothing_repeated(
     assert " 3 repetitions (period " in capsys.readouterr().out
 
 
+# on one xdist worker: the module's lunge_nobody made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt36i")
+
+
 @pytest.fixture(scope="module")
 def lunge_nobody(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The reverse lunge's first 150 frames at a quarter size, lossless (FFV1 in Matroska: the

@@ -78,6 +78,10 @@ def _lost_in_a_squat(hold_s: float) -> tuple[PoseSequence, int]:
 HOLDS_S = [0.0, 0.3, 1.0]
 
 
+# on one xdist worker: the module's squat_or_arms made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt37b")
+
+
 @pytest.fixture(scope="module")
 def squat_or_arms() -> object:
     """A case base of the synthetic squat and arm abduction, as tests/test_hunt36j.py fits."""

@@ -69,6 +69,10 @@ def test_a_frame_pushed_after_finish_is_refused_saying_the_stream_ended() -> Non
     assert live.finish() == []
 
 
+# on one xdist worker: the module's clf_and_squat made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt37l")
+
+
 @pytest.fixture(scope="module")
 def clf_and_squat() -> tuple[CaseBaseClassifier, PoseSequence]:
     """A classifier of three demo activities (every third clip, as a tracker's arrays) and

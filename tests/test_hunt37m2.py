@@ -65,6 +65,10 @@ def _fitted(activities: tuple[str, ...]) -> CaseBaseClassifier:
     return CaseBaseClassifier(k=3, mirror=False).fit(X, [r["label"] for r in rows])
 
 
+# on one xdist worker: the module's two made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt37m2")
+
+
 @pytest.fixture(scope="module")
 def two() -> tuple[CaseBaseClassifier, CaseBaseClassifier, PoseSequence]:
     """Two classifiers of three activities each, not the same ones, and 3 s of a squat."""

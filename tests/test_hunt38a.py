@@ -42,6 +42,10 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
     return out
 
 
+# on one xdist worker: the module's source made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt38a")
+
+
 @pytest.fixture(scope="module")
 def source(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small case base with everything a case base can hold: trained on the demo's s01 and

@@ -120,6 +120,10 @@ def _streamed(seq: PoseSequence) -> list[tuple[int, int, str | None, int]]:
     return [(s.start_frame, s.end_frame, s.label, s.repetitions) for s in out]
 
 
+# on one xdist worker: the module's squat_or_arms made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt38b")
+
+
 @pytest.fixture(scope="module")
 def squat_or_arms() -> object:
     """A case base of the synthetic squat and arm abduction (tests/test_hunt37b.py's)."""

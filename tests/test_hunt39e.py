@@ -45,6 +45,10 @@ def _header_modes(db: Path) -> bytes:
     return db.read_bytes()[18:20]
 
 
+# on one xdist worker: the module's trained, three made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt39e")
+
+
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
     db = tmp_path_factory.mktemp("cb") / "cb.sqlite"

@@ -17,6 +17,9 @@ from features.datasets import Clip
 from features.repetitions import split_windows
 from tests.moves import clip
 
+# on one xdist worker: the module's classifier made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt40n")
+
 
 @pytest.fixture(scope="module")
 def classifier() -> CaseBaseClassifier:

@@ -19,6 +19,10 @@ from posecbr.cli import main
 NAMES = "1 JumpJack\n2 Jog\n3 Squat\n4 KneeRaise\n6 Twist\n"
 
 
+# on one xdist worker: the module's away made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt42h")
+
+
 @pytest.fixture(scope="module")
 def away(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
     """CMU 13_30 with its first labelled stretch, JumpJack (18 blocks of 0.1 s: frames

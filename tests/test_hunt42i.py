@@ -19,6 +19,9 @@ from features.repetitions import count_repetitions
 from posecbr.cli import main
 from tests.badinput import refused, small_case_base, standing_clip
 
+# on one xdist worker: the module's case_base, demo_clips made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt42i")
+
 
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> Path:

@@ -29,6 +29,10 @@ BAD: list[tuple[dict[str, Any], str]] = [
 ]
 
 
+# on one xdist worker: the module's data made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt42p")
+
+
 @pytest.fixture(scope="module")
 def data() -> tuple[list[Any], np.ndarray]:
     return arm_dataset(4, seed=1)

@@ -90,6 +90,10 @@ def test_the_stored_parameters_are_the_documented_ones() -> None:
     assert DADClassifier().get_params() == {"add": None, "step_s": None, "window_s": 4.0}
 
 
+# on one xdist worker: the module's fitted made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt42s")
+
+
 @pytest.fixture(scope="module")
 def fitted() -> tuple[CaseBaseClassifier, list[Any]]:
     X, y = arm_dataset(3, seed=3)
