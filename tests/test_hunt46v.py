@@ -57,6 +57,10 @@ def test_upright_turns_a_picture_as_pillow_shows_it() -> None:
         np.testing.assert_array_equal(upright(stored, orientation), expected, str(orientation))
 
 
+# on one xdist worker: the module's extracted made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt46v")
+
+
 @pytest.fixture(scope="module")
 def extracted(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """``extract`` of the photo upright and stored sideways both ways: their pose files."""

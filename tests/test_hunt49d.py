@@ -38,6 +38,10 @@ _KINECT = {
 }
 
 
+# on one xdist worker: the module's takes, fluent_cb made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt49d")
+
+
 @pytest.fixture(scope="module")
 def takes(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Three real UI-PRMD Kinect takes as pose files: ``train/scaption/a.npz``,

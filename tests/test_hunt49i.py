@@ -38,6 +38,10 @@ _KINECT = {
 }
 
 
+# on one xdist worker: the module's takes, qmp_cb made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt49i")
+
+
 @pytest.fixture(scope="module")
 def takes(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The real UI-PRMD Kinect takes of :data:`_KINECT` as pose files."""

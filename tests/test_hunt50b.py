@@ -77,6 +77,10 @@ def test_a_labels_csv_of_one_row_takes_an_overlay_folder(
             " videos, not one video file")  # fmt: skip
 
 
+# on one xdist worker: the module's amc_data made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt50b")
+
+
 @pytest.fixture(scope="module")
 def amc_data(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, str]:
     """Two activities of two AMC takes each (CMU 13_29's and 13_30's first 0.5 and 1.1 s),

@@ -45,6 +45,10 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("features", "casebase_store", "cbr", "posecbr")
 
 
+# on one xdist worker: the module's arm_store made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt50f")
+
+
 @pytest.fixture(scope="module")
 def arm_store(
     arm_k3: tuple[CaseBaseClassifier, PoseSequence, list[str]],

@@ -108,6 +108,10 @@ def _colours_seen(video: Path) -> list[np.ndarray]:
     return seen
 
 
+# on one xdist worker: the module's jumping_jacks, slow_start made once, not once per worker
+pytestmark = pytest.mark.xdist_group("hunt51d")
+
+
 @pytest.fixture(scope="module")
 def jumping_jacks(shared_data: Path) -> np.ndarray:
     """CMU 13_30 (120 fps) at 30 fps: world positions ``(frames, joints, 3)``."""

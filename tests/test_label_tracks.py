@@ -81,6 +81,10 @@ def test_label_names_and_tracks_read_errors(tmp_path: Path) -> None:
         LabelTrack(track, -0.1)
 
 
+# on one xdist worker: the module's recording made once, not once per worker
+pytestmark = pytest.mark.xdist_group("label_tracks")
+
+
 @pytest.fixture(scope="module")
 def recording(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """CMU 13_30 (JumpJack, Twist, KneeRaise, Squat, Jog) as a pose file."""

@@ -79,6 +79,10 @@ def test_extract_refuses_a_pose_file_in_a_missing_folder(
 # ---------------------------------------------------------------------------- classify
 
 
+# on one xdist worker: the module's case_base made once, not once per worker
+pytestmark = pytest.mark.xdist_group("output_collisions")
+
+
 @pytest.fixture(scope="module")
 def case_base(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A small case base trained from synthetic arm movements, and clips to classify."""

@@ -37,6 +37,10 @@ def _blank_before(seq: PoseSequence, frames: int) -> PoseSequence:
     return replace(out, positions=out.positions[::-1])
 
 
+# on one xdist worker: the module's squats made once, not once per worker
+pytestmark = pytest.mark.xdist_group("partly_in_view")
+
+
 @pytest.fixture(scope="module")
 def squats(shared_data: Path) -> PoseSequence:
     """CMU subject 13's squats: two by the hand counts of tests/fixtures."""

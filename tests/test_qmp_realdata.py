@@ -14,6 +14,10 @@ from features.qmp import qmp_features
 SHOULDER_MOVES = {"m07", "m08", "m09", "m10"}
 
 
+# on one xdist worker: the module's uiprmd_clips made once, not once per worker
+pytestmark = pytest.mark.xdist_group("qmp_realdata")
+
+
 @pytest.fixture(scope="module")
 def uiprmd_clips(shared_data: Path) -> list[Clip]:
     return list(

@@ -20,6 +20,10 @@ CLIP = DEMO / "m01_s03_e01.npz"
 V1_SQL = Path(__file__).with_name("fixtures") / "store_v1.sql"
 
 
+# on one xdist worker: the module's trained made once, not once per worker
+pytestmark = pytest.mark.xdist_group("readonly22")
+
+
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small DTW case base (its envelopes are cached per case in the file)."""

@@ -274,6 +274,10 @@ def _fixture() -> dict[str, Any]:
     return data
 
 
+# on one xdist worker: the module's recordings made once, not once per worker
+pytestmark = pytest.mark.xdist_group("repetitions")
+
+
 @pytest.fixture(scope="module")
 def recordings(shared_data: Path) -> dict[str, PoseSequence]:
     out = {}

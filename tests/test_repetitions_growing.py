@@ -67,6 +67,10 @@ def test_the_running_median_reads_only_the_clips_own_samples_at_its_ends() -> No
     np.testing.assert_allclose(_running_median(inside, 7)[:, 0], np.zeros(11))
 
 
+# on one xdist worker: the module's vicon_sit_to_stand, six_front_kicks made once
+pytestmark = pytest.mark.xdist_group("repetitions_growing")
+
+
 @pytest.fixture(scope="module")
 def vicon_sit_to_stand(shared_data: Path) -> PoseSequence:
     """UI-PRMD Vicon, subject 2, movement 5 (sitting down and standing up), its first four correct

@@ -107,6 +107,10 @@ def _joined(shared_data: Path) -> list[Known]:
     return out
 
 
+# on one xdist worker: the module's known made once, not once per worker
+pytestmark = pytest.mark.xdist_group("repetitions_unseen")
+
+
 @pytest.fixture(scope="module")
 def known(shared_data: Path) -> list[Known]:
     return _mocap(shared_data) + _joined(shared_data)

@@ -24,6 +24,10 @@ FIXTURE = Path(__file__).parent / "fixtures" / "repetition_counts.json"
 ARM_JOINTS = ("left_elbow", "right_elbow", "left_wrist", "right_wrist")
 
 
+# on one xdist worker: the module's cmu_13_31 made once, not once per worker
+pytestmark = pytest.mark.xdist_group("segment_unseen")
+
+
 @pytest.fixture(scope="module")
 def cmu_13_31(shared_data: Path) -> tuple[PoseSequence, dict[str, dict]]:
     """CMU 13_31 on the canonical skeleton, and its stretches counted by hand by activity

@@ -31,6 +31,10 @@ DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 SEEN = "deep_squat,standing_shoulder_abduction,side_lunge"
 
 
+# on one xdist worker: the module's trained made once, not once per worker
+pytestmark = pytest.mark.xdist_group("spread_default")
+
+
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
     db = tmp_path_factory.mktemp("cb") / "cb.sqlite"

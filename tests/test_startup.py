@@ -222,6 +222,10 @@ def test_dad_classifier_is_still_importable_from_the_package() -> None:
     assert DADClassifier is defined
 
 
+# on one xdist worker: the module's small_db made once, not once per worker
+pytestmark = pytest.mark.xdist_group("startup")
+
+
 @pytest.fixture(scope="module")
 def small_db(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from posecbr.cli import main

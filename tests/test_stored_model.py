@@ -21,6 +21,10 @@ DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
 QMP_LABELS = ("deep_squat", "inline_lunge", "standing_shoulder_abduction", "sit_to_stand")
 
 
+# on one xdist worker: the module's demo_split made once, not once per worker
+pytestmark = pytest.mark.xdist_group("stored_model")
+
+
 @pytest.fixture(scope="module")
 def demo_split() -> tuple[list, list, list]:
     train = load_dataset(DEMO, subjects={"s01", "s02"})

@@ -87,6 +87,10 @@ def test_watch_leaves_the_same_gap_missing_as_the_frames_come(
     assert err[1:] == ["note: phone.ts: 0.6 s without frames at 0.4-1.0 s left missing"]
 
 
+# on one xdist worker: the module's gap_ts, lunge_jump, lunge_gap_mkv made once, not once per worker
+pytestmark = pytest.mark.xdist_group("video_gaps")
+
+
 @pytest.fixture(scope="module")
 def gap_ts(people: list[np.ndarray], tmp_path_factory: pytest.TempPathFactory) -> Path:  # noqa: F811
     return _write(tmp_path_factory.mktemp("gap") / "jump.ts", GAP_MS, people[:12])
