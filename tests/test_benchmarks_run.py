@@ -68,7 +68,7 @@ def test_compare_quick_runs_and_records_the_peers(
     task = doc["tasks"]["demo slice"]
     assert task["n_clips"] == n_clips == 18
     assert task["subjects"] == ["s01", "s02", "s03"]
-    assert task["cv"] == {"scheme": "loso", "n_folds": 3}
+    assert task["cv"] == {"scheme": "loso", "n_folds": 3, "bootstrap_over": "subjects"}
     assert sorted(task["classes"]) == ["deep_squat", "hurdle_step"]
     by_name = {m["name"]: m for m in task["methods"]}
     assert set(methods) <= set(by_name)

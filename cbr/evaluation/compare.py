@@ -18,8 +18,10 @@ Protocol
   :mod:`cbr.evaluation.runner`: in this process for ``jobs=1``, else in spawned workers that
   each receive the clips once and compute their features once, before their first task.
 - Statistics (:mod:`cbr.evaluation.stats`): accuracy with a Wilson 95 % interval; macro-F1 with
-  a percentile bootstrap over clips; per-class recall with Wilson intervals; McNemar's exact
-  (binomial) test of every method against the best one on the same clips.
+  a percentile bootstrap, under leave-one-subject-out over subjects and then the clips of each
+  drawn subject (one person's clips share the errors made on that person), else over clips;
+  per-class recall with Wilson intervals; McNemar's exact (binomial) test of every method
+  against the best one on the same clips.
 """
 
 from __future__ import annotations
@@ -158,8 +160,10 @@ def _method_result(
     skipped: dict[int, str],
     fold_results: list[FoldResult],
     settings: CompareSettings,
+    clusters: np.ndarray | None = None,
 ) -> MethodResult:
-    """Method ``mi``'s row: skipped, failed (the first fold's error), or scored."""
+    """Method ``mi``'s row: skipped, failed (the first fold's error), or scored (``clusters``
+    ``(n,)``: what macro-F1's bootstrap resamples whole, None for clips)."""
     head = (m.name, m.kind, m.interpretable, dict(m.params))
     if mi in skipped:
         return MethodResult(*head, "skipped", skipped[mi])
@@ -170,7 +174,7 @@ def _method_result(
     pred = np.empty(len(data.y), dtype=object)
     for r in mine:
         pred[r.test] = r.pred
-    return MethodResult(*head, "ok", "", score(data, pred, mine, settings))
+    return MethodResult(*head, "ok", "", score(data, pred, mine, settings, clusters))
 
 
 def _status_notes(rows: list[MethodResult]) -> list[str]:
@@ -232,8 +236,11 @@ def run_compare(
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)
     ctx = RunContext(data, tuple(methods), folds, active, int(settings.peer_length))
     fold_results = _run_tasks(ctx, int(settings.jobs), settings.scheduler)
+    # leave one subject out: a fold is a subject, and the bootstrap draws subjects whole
+    clusters = folds if scheme == "loso" else None
     rows = [
-        _method_result(mi, m, data, skipped, fold_results, settings) for mi, m in enumerate(methods)
+        _method_result(mi, m, data, skipped, fold_results, settings, clusters)
+        for mi, m in enumerate(methods)
     ]
     best, best_interpretable = best_methods(rows)
     results = CompareResults(
@@ -241,7 +248,12 @@ def run_compare(
         machine=machine_info(),
         dataset=_dataset(data, source),
         settings=settings.to_dict(),
-        cv=CVSummary(scheme, len(set(folds.tolist())), folds.tolist()),
+        cv=CVSummary(
+            scheme,
+            len(set(folds.tolist())),
+            folds.tolist(),
+            "clips" if clusters is None else "subjects",
+        ),
         notes=data.notes
         + fold_notes
         + _qmp_note(settings)

@@ -250,6 +250,13 @@ def _classes_words(classes: list[str], target: str | None) -> str:
     return f"{e(k)} classes of <b>{e(target)}</b>"
 
 
+def _bootstrap_over(results: CompareResults) -> str:
+    """What macro-F1's bootstrap resampled, in words for the table's caption."""
+    if results.cv.bootstrap_over == "subjects":
+        return "subjects and their clips (subjects drawn, then clips within each)"
+    return "clips"
+
+
 def _head(results: CompareResults) -> list[str]:
     ds, st, cv, machine = results.dataset, results.settings, results.cv, results.machine
     name = e(Path(ds.source).name)
@@ -324,9 +331,9 @@ def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
     parts += [
         "<h2>Results</h2>",
         "<p class='small'>Accuracy with Wilson 95 % interval; macro-F1 with bootstrap 95 % "
-        "interval over clips; fit and predict times summed over folds; case base = cases kept "
-        "after trimming (mean over folds); McNemar exact test against the best method on the "
-        "same clips.</p>",
+        f"interval over {_bootstrap_over(results)}; fit and predict times summed over folds; "
+        "case base = cases kept after trimming (mean over folds); McNemar exact test against "
+        "the best method on the same clips.</p>",
         _table(results),
         fig["accuracy"],
         "<h2>Recall per class (%)</h2>",

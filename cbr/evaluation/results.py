@@ -346,22 +346,33 @@ class DatasetSummary:
 
 @dataclass(frozen=True)
 class CVSummary:
-    """The cross-validation used: scheme ("loso", "kfold" or "given"), folds, and the fold of
-    every clip ``(n_clips,)``."""
+    """The cross-validation used: scheme ("loso", "kfold" or "given"), folds, the fold of
+    every clip ``(n_clips,)``, and what macro-F1's bootstrap resampled ("subjects" under
+    leave-one-subject-out, else "clips"; "clips" for a file written before it was said)."""
 
     scheme: str
     n_folds: int
     fold_of_clip: list[int]
+    bootstrap_over: str = "clips"
 
     def to_dict(self) -> dict[str, Any]:
-        return {"scheme": self.scheme, "n_folds": self.n_folds, "fold_of_clip": self.fold_of_clip}
+        return {
+            "scheme": self.scheme,
+            "n_folds": self.n_folds,
+            "fold_of_clip": self.fold_of_clip,
+            "bootstrap_over": self.bootstrap_over,
+        }
 
     @staticmethod
     def read(r: Reader, d: dict[str, Any], where: str) -> CVSummary:
+        over = r.get(d, "bootstrap_over", where, "str", optional=True)
+        if over not in (None, "clips", "subjects"):
+            r.fail(f"{where}.bootstrap_over", f"must be 'clips' or 'subjects', got {over!r}")
         return CVSummary(
             r.get(d, "scheme", where, "str"),
             r.get(d, "n_folds", where, "int"),
             r.items(d, "fold_of_clip", where, "int"),
+            over or "clips",
         )
 
 

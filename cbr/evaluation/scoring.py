@@ -34,9 +34,16 @@ def _mean_case_base(results: list[FoldResult]) -> float | None:
 
 
 def score(
-    data: Prepared, pred: np.ndarray, results: list[FoldResult], settings: CompareSettings
+    data: Prepared,
+    pred: np.ndarray,
+    results: list[FoldResult],
+    settings: CompareSettings,
+    clusters: np.ndarray | None = None,
 ) -> Scores:
     """The figures of one method from its predictions ``(n,)`` of every clip's target.
+
+    clusters: ``(n,)`` what macro-F1's bootstrap resamples whole (every clip's subject under
+    leave-one-subject-out), or None to resample clips.
 
     A prediction outside the target classes (e.g. DAD's answer for an activity the target
     does not name) counts as wrong and is kept in ``unassigned``.
@@ -56,7 +63,7 @@ def score(
         accuracy_ci=wilson_interval(int(correct.sum()), n),
         macro_f1=macro_f1(t, p),
         macro_f1_ci=bootstrap_macro_f1(
-            t, p, other + 1, int(settings.bootstrap), seed=int(settings.seed)
+            t, p, other + 1, int(settings.bootstrap), seed=int(settings.seed), groups=clusters
         ),
         per_class={c: _rate(correct[t == i]) for c, i in code.items()},
         per_group=_per_group(data, correct),
