@@ -88,7 +88,17 @@ from .unknown import (
 HOP_S = 0.5
 """The rolling label is decided every this many seconds of stream."""
 MAX_SEGMENT_S = 120.0
-"""Repetitions are counted over at most the last this many seconds of a segment."""
+"""Frames are kept for at most the last this many seconds of the segment in progress (and of
+the stretches its decisions read)."""
+TALLY_S = 30.0
+"""The repetitions of the segment in progress that end more than this many seconds before
+the latest frame, before any frame a cut of it can still fall on, are tallied once the
+frames it is counted on run to twice as many seconds (:meth:`LiveSegmenter._tally`): their
+count is kept and their frames are not counted again. A segment of any length counts every
+repetition (before, those of its last :data:`MAX_SEGMENT_S` seconds: 58 squats in one
+141-s segment counted 46), and what is counted at each hop, for the segment drawn and for
+the next tally, is at most :data:`TALLY_S` twice over, however long the segment has
+run."""
 PERSON_WINDOWS = 1200
 """How far the stream's person lies from every case (:func:`cbr.unknown.for_person`) is read
 from at most this many of the latest windows (10 minutes of fixed windows)."""
@@ -267,6 +277,16 @@ class _Cut(NamedTuple):
     held: bool
 
 
+class _Tally(NamedTuple):
+    """The repetitions of the segment that begins at frame ``start`` tallied
+    (:meth:`LiveSegmenter._tally`): ``counted`` of them end by frame ``upto``, where the rest
+    of the segment is counted from (a frame between two repetitions)."""
+
+    start: int
+    upto: int
+    counted: int
+
+
 @dataclass(frozen=True)
 class _Kept:
     """The stream's frames still kept, counted as :func:`cbr.segmentation.unclaimed` counts
@@ -428,6 +448,8 @@ class LiveSegmenter:
         # posture got into and held, :meth:`_still_beyond`)
         self.held_from = 0  # the first repetition's first frame of the segment that held it
         self.last_cut: _Cut | None = None  # the last segment finished (:meth:`_mine`)
+        self.tally: _Tally | None = None  # the repetitions of the segment in progress
+        # tallied (:meth:`_tally`)
         self.beside: int | None = None  # the last repetition's first frame of the last
         # segment finished (None: it had none, or nobody was in view): what the stream's last
         # segment is judged beside when the stream ends (:meth:`_beside_whole`)
@@ -977,7 +999,9 @@ class LiveSegmenter:
     def _trim(self) -> None:
         """Forget frames and hops no segment in progress or decision can need (nor the
         stream's end: the frames from the last repetition of the segment finished last,
-        :meth:`_beside_whole`)."""
+        :meth:`_beside_whole`), the repetitions of the segment in progress tallied first
+        (:meth:`_tally`)."""
+        self._tally()
         begun = min(self.seen_start, self.stretch_start)
         if self.waiting is not None:  # the first segment, held back: from the stream's start
             begun = 0
@@ -1165,6 +1189,18 @@ class LiveSegmenter:
         explained: bool = True,
         lost: bool = False,
     ) -> LiveSegment:
+        """:meth:`_counted`'s segment."""
+        return self._counted(start, end, state, cut, explained, lost)[0]
+
+    def _counted(
+        self,
+        start: int,
+        end: int,
+        state: int,
+        cut: bool,
+        explained: bool = True,
+        lost: bool = False,
+    ) -> tuple[LiveSegment, tuple[Repetition, ...]]:
         """Frames [start, end) as a segment of ``state`` (an activity, or n_classes: unknown;
         :meth:`_confidence`); ``cut``: it ends where another begins (a finished segment: its
         repetitions are counted as :func:`cbr.segmentation.keep_whole` says, and the next one
@@ -1187,16 +1223,17 @@ class LiveSegmenter:
         person is not seen again, no repetition was seen finished, and it counts none (the
         way down of a squat, the person then lost). Before, this segment kept it: the way
         down of a squat, the person then lost, counted 1, and seen again on the way up,
-        2."""
+        2. A segment that has run longer than :data:`TALLY_S` twice over adds the
+        repetitions tallied before the frames it is counted on (:meth:`_tally`). Returns the
+        segment and the repetitions it counts on those frames."""
         if state == self.nobody:
             if cut:  # no movement turns at its end
                 self.turn = self.holding = False
                 self.beside = None
                 self.last_cut = _Cut((), (start, end), True, False)
-            return LiveSegment(
-                start, end, None, 1.0, 0, nobody_explanation(self._absent_in(start, end))
-            )
-        first = self._first_counted(start, end, state)
+            told = nobody_explanation(self._absent_in(start, end))
+            return LiveSegment(start, end, None, 1.0, 0, told), ()
+        first, tallied = self._first_counted(start, end, state)
         reps: tuple[Repetition, ...] = ()
         # the stream's own start and (once finished) end are the recording's, as offline
         # (cbr.segmentation._repetitions): part of one repetition there is none
@@ -1229,8 +1266,8 @@ class LiveSegmenter:
         if cut:
             self._finished(reps, first, end, held, passed_on)
         kept = self._unless_got_into(kept, end, not cut and explained)
-        count = len(kept)
-        if not cut and explained and self.holding and not reps:
+        count = tallied + len(kept)
+        if not cut and explained and self.holding and not reps and not tallied:
             # the stream ended still in a hold passed on from a segment before: its far
             # point counts here, as it would have there had the stream ended sooner
             count += self.passed_on
@@ -1238,24 +1275,71 @@ class LiveSegmenter:
         text, novelty = self._explain(start, end, state) if explained else ("", math.nan)
         out = LiveSegment(start, end, label, float(confidence), count, text, novelty)
         self._hold(out, first, reps, held, cut and not lost)
-        return out
+        return out, kept
 
-    def _first_counted(self, start: int, end: int, state: int) -> int:
+    def _first_counted(self, start: int, end: int, state: int) -> tuple[int, int]:
         """The first frame the repetitions of the segment of frames [start, end), labelled
-        ``state``, are counted from: at most its last :data:`MAX_SEGMENT_S` seconds of the
-        frames still kept; right after a segment with nobody in view (:attr:`last_cut`) that
-        took over from one of the same activity whose far point the person was lost at,
-        from that far point's repetition on (:attr:`lost_from`), across the stretch, as
-        offline (:func:`cbr.segmentation.counted_segments`: another activity after the
-        stretch does not finish it)."""
+        ``state``, are counted from, and how many of its repetitions before it are tallied
+        (:meth:`_tally`: from where the tally ends); at most its last :data:`MAX_SEGMENT_S`
+        seconds of the frames still kept; right after a segment with nobody in view
+        (:attr:`last_cut`) that took over from one of the same activity whose far point the
+        person was lost at, from that far point's repetition on (:attr:`lost_from`), across
+        the stretch, as offline (:func:`cbr.segmentation.counted_segments`: another activity
+        after the stretch does not finish it)."""
         first = max(start, end - int(MAX_SEGMENT_S * self.fps), self.offset)
         lost_from, self.lost_from = self.lost_from, None
+        tally = self.tally
+        if tally is not None and tally.start == start and tally.upto < end:
+            return max(first, tally.upto), tally.counted
         prior = self.last_cut
         if lost_from is None or lost_from[1] != state:
-            return first
+            return first, 0
         if prior is None or not prior.blind or prior.bounds[1] != start:
-            return first
-        return max(min(first, lost_from[0]), end - int(MAX_SEGMENT_S * self.fps), self.offset)
+            return first, 0
+        first = max(min(first, lost_from[0]), end - int(MAX_SEGMENT_S * self.fps), self.offset)
+        return first, 0
+
+    def _tally(self) -> None:
+        """Tally the repetitions of the segment in progress once more than :data:`TALLY_S`
+        of the frames it is counted on (from its start, or from where the last tally ended)
+        lie :data:`TALLY_S` before the latest frame and before any frame a cut of the
+        segment can still fall on (:meth:`_settled_until`): counted as :meth:`current`
+        counts them, those that end by then are added to the tally, and the segment is
+        counted from the end of the last of them on (the movement back at rest, between two
+        repetitions); with none, from the first that runs on past that frame, or from that
+        frame when none does (the frames before it hold no repetition). While the decoders
+        leave the cut open further back, nothing is tallied, and the segment is counted over
+        the frames kept (:data:`MAX_SEGMENT_S`), as before."""
+        if self.seen is None or self.seen == self.nobody or self.ended:
+            return
+        start, tally = self.seen_start, self.tally
+        if tally is None or tally.start != start:
+            tally = _Tally(start, start, 0)
+        until = min(self._settled_until(), self.n - TALLY_S * self.fps)
+        if until - max(tally.upto, self.offset) <= TALLY_S * self.fps:
+            return
+        lost_from = self.lost_from  # as current(): asking changes nothing
+        try:
+            _, reps = self._counted(start, self.n, self.seen, False, False)
+        finally:
+            self.lost_from = lost_from
+        done = [r for r in reps if r.end_frame <= until]
+        if done:
+            upto = done[-1].end_frame
+        else:
+            across = [r.start_frame for r in reps if r.start_frame < until < r.end_frame]
+            upto = int(min([until, *across]))
+        self.tally = _Tally(start, max(tally.upto, upto), tally.counted + len(done))
+
+    def _settled_until(self) -> float:
+        """The earliest frame a cut of the segment in progress can still fall on, less the
+        longest window: no earlier than the last hop pass 2 settled (a later change falls
+        after it) nor than a stretch with nobody in view still to be followed, or in
+        progress, begins (where the person was lost)."""
+        lost = [a for a, _ in self.blind]
+        if self.blind_from is not None:
+            lost.append(self.blind_from)
+        return min([self.last_centre, *lost]) - self.longest
 
     def _left_when_lost(
         self, lost: bool, counted: tuple[Repetition, ...], kept: tuple[Repetition, ...], end: int
