@@ -111,6 +111,7 @@ from typing import Any
 
 import numpy as np
 
+from .blas import one_blas_thread
 from .body import check_person, long_runs
 from .datasets import Clip
 from .derived import signals_of, stretch
@@ -1029,21 +1030,9 @@ def movement_direction(x: np.ndarray) -> np.ndarray:
     v = np.diff(x, axis=0)
     if not len(v) or not np.any(v):
         return np.asarray(np.eye(x.shape[1])[0])
-    if v.size < LONG_SVD:
+    with one_blas_thread():  # samples by a few angles: BLAS's threads only wait for each other
         _, _, vt = np.linalg.svd(v - v.mean(axis=0), full_matrices=False)
-    else:  # a recording's samples: BLAS's threads only wait for each other
-        from .blas import one_blas_thread
-
-        with one_blas_thread():
-            _, _, vt = np.linalg.svd(v - v.mean(axis=0), full_matrices=False)
     return np.asarray(vt[0])
-
-
-LONG_SVD = 1 << 16
-"""Values (samples x angles) from which :func:`movement_direction`'s SVD runs on one BLAS
-thread (:mod:`features.blas`): a clip's few hundred samples never reach OpenBLAS's threads; a
-10-minute recording's 18,000 samples of 8 angles took 42 ms on two threads of a busy 2-core
-machine, 1.3 ms on one."""
 
 
 def side_parts(x: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
