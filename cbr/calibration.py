@@ -18,13 +18,13 @@ calibration) then maps the scores to probabilities. The map is stored as knots o
 piecewise-linear curve with the case base, with ``T`` and the neighbourhood, so a loaded
 classifier answers with the same confidences; a calibration stored before the soft vote maps
 the vote share. Why not the vote share: a held-out training clip is classified by a case base
-with one subject fewer than the deployed one, and the share means something else there (HDM05,
-three actors: the inner case bases have one actor, whose unanimous votes were all right, while
-the deployed two-actor case base's unanimous votes on a new actor are right 90-97 %); the
-relative distances carry over between case-base sizes better. Isotonic regression was tried
-too: on held-out UI-PRMD subjects it left a correct-vs-incorrect ECE of 0.050 where Platt
-scaling leaves 0.038 (one case base per movement learns from about 140 clips, too few for a
-free-form curve).
+with one subject fewer than the deployed one, and the share means something else there (an
+inner case base of one subject votes unanimously and rightly on its held-out clips where the
+deployed case base's unanimous votes on a new subject are not always right:
+docs/measurements.md, "The diagnosis with the vote share"); the relative distances carry over
+between case-base sizes better. Isotonic regression was tried too and calibrated worse: a
+case base learns from too few clips for a free-form curve (docs/measurements.md, "Figures
+behind the code's rules: Isotonic regression for the confidence").
 """
 
 from __future__ import annotations

@@ -964,7 +964,7 @@ def _count(n: int, noun: str) -> str:
 
 
 def _case_ref(cb: CaseBase, i: int, names: int) -> str:
-    """``#5 (m01_s01_e03.npz)`` (``names`` 2) or ``#5`` (1); a case not stored (no id) is
+    """``#5 (squat_03.npz)`` (``names`` 2) or ``#5`` (1); a case not stored (no id) is
     named by its clip, or by its position (``case 3``) when its clip was given as arrays."""
     assert cb.ids is not None
     if int(cb.ids[i]) < 0:

@@ -356,22 +356,22 @@ def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -
 
 
 STILL_MOVEMENT_SHARE = 0.5
-"""A window moves too little to be any activity of the case base when its joint angles vary
-less than this share of what they vary in the least-moving of its cases (:func:`too_still`):
-a person standing still is not doing an exercise when every stored window moves, whatever its
-nearest case (a case base trained from CMU 13_30 holds windows of the jog that end standing,
-and 5 s of standing still came out "Jog 0.99"). A share of the case base's own least
-movement, not a distance: a case base holding an activity that is itself still (a plank
-held, standing) keeps still windows, and the nearest case tells which activity they are."""
+"""A window moves too little to be any activity of the case base when its joint angles vary less
+than this share of what they vary in the least-moving of its cases (:func:`too_still`): a person
+standing still is not doing an exercise when every stored window moves, whatever its nearest
+case (a case base that holds windows of a jog ending standing took standing still for the jog:
+docs/measurements.md, "Figures behind the code's rules: Still windows"). A share of the case
+base's own least movement, not a distance: a case base holding an activity that is itself still
+(a plank held, standing) keeps still windows, and the nearest case tells which activity they
+are."""
 STILL_CASE_MOVEMENT = 0.02
 """A case that moves less than this (:func:`movement_of`, pi radians: a mean standard
 deviation of 3.6 degrees) is itself still, a posture held: a case base holding one keeps
 still windows, whatever its other cases move (:func:`least_movement`), since the sensor's
-jitter alone sets how little a still window moves (a posture held in CMU mocap with 3 mm of
-jitter: 0.004; a side plank held in a Pexels video through BlazePose: 0.015) and a person
-holding a stored posture may jitter less than its case did (a frozen frame not at all).
-Exercises move more: the least-moving HDM05 clip (a hop) 0.030, CMU 13_30's jog windows
-0.034."""
+jitter alone sets how little a still window moves (a posture held in motion capture well
+under 0.02, one held through a video pose model near it) and a person holding a stored
+posture may jitter less than its case did (a frozen frame not at all). Exercises move more
+(docs/measurements.md, "Figures behind the code's rules: Still windows")."""
 MOVEMENT_COLUMNS = ("angle:", "@std")
 """The problem columns :func:`movement_of` reads: each joint angle's standard deviation over
 the window (a fluent summary with ``angles``, the default ``train`` problem)."""
@@ -1409,8 +1409,9 @@ def _held_into_the_end(
     got into and held (:func:`features.repetitions.count_in_signals`), no repetition, as
     ``reps`` counts the recording. Neither segment alone holds both the way in and the
     still end that rule reads, and the last counted the far point it was handed wherever
-    its line sagged by :data:`features.repetitions.MIN_EXCURSION_RAD` in the hold (the
-    bundled side plank, whose supporting shoulder sinks 16 degrees, cut in its hold)."""
+    its line sagged by :data:`features.repetitions.MIN_EXCURSION_RAD` in the hold (a side
+    plank whose supporting shoulder sinks as it is held; docs/measurements.md, "Figures behind
+    the code's rules: A posture held across a cut")."""
     last = len(bounds) - 1
     if bounds[-1][1] < n_frames or not out[last]:
         return out

@@ -98,9 +98,10 @@ class Offset:
     d2`` of a known movement rises towards 1, unlike but for the person. Taking the offset
     off every distance (the nearest tenth of the recording's windows brought to where the
     case base's own lie) gives back the margins the thresholds were read from. With one
-    person's case base segmenting other people (and :data:`NOVEL_CATCH` raised with it), the
-    seen blocks of UI-PRMD Vicon's people named rightly go from 75 to 86 %, HDM05's left-out
-    blocks called unknown from 43 to 68 % (README, "Long recordings"). A recording of nothing
+    person's case base segmenting other people (and :data:`NOVEL_CATCH` raised with it), more
+    of their seen blocks are named rightly and more left-out blocks called unknown
+    (docs/measurements.md, "Segmentation with one person's case base, and on other labs'
+    people, measured"). A recording of nothing
     but movements the case base lacks is taken in part for a far person: the offset cannot
     tell the two apart."""
 

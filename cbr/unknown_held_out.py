@@ -15,8 +15,9 @@ from .weights import MIRROR_FLAG
 
 MARGIN_SAMPLE = 2048
 """Training cases held out to calibrate the margin (a seeded sample when there are more): a 5 %
-quantile read from 256 lies 13 cases from the top and moved by 10 points of UI-PRMD Vicon's
-seen blocks from one sample to another; each costs one scan of the case base."""
+quantile read from a few hundred lies a dozen cases from the top and moves with the sample
+(docs/measurements.md, "Figures behind the code's rules: The margin's held-out sample"); each
+costs one scan of the case base."""
 
 
 def activity_codes(labels: Any, classes: Any) -> np.ndarray:

@@ -37,9 +37,10 @@ The judges, each calibrated on the case base itself, never on what is being segm
   of one person it is :class:`ActivityMargin`.
 - :class:`SpreadFar` (``--unknown spread-far``): :class:`SpreadMargin`, or unknown when the
   window's nearest case lies farther than all but :data:`FALSE_UNKNOWN` of the held-out
-  known cases' do (not the default: on people not in the case base it caught more of
-  UI-PRMD Kinect's left-out blocks for 1.4 points of its seen ones, and none more of
-  HDM05's; README, "The far bound as a judge").
+  known cases' do (not the default: on people not in the case base it caught more left-out
+  blocks on one dataset for some of its seen ones, and none more on another;
+  docs/measurements.md, "Figures behind the code's rules: Unknown: the far bound and loose
+  activities").
 - With a case base of one person (held out by recording or by time, not by person), the two
   margin judges also have a floor (:func:`one_person_floor`) and see each recording's
   distances less how much farther its person lies from every case than the case base's own
@@ -381,7 +382,7 @@ class SpreadMargin(ActivityMargin):
     turn with the spreads read from the others (:func:`choose_spread`). A movement the case
     base lacks is often as clearly nearer one activity as a known one is, but farther from it
     than that activity's own cases lie from each other; the margin alone sees only the first
-    (UI-PRMD Kinect, where every activity's cases lie loosely: README, "Unknown").
+    (where every activity's cases lie loosely, as a noisy sensor's do).
 
     Only with a case base that holds out people (basis "subject"): a spread read from one
     person's held-out cases says nothing of how far the next person's known movement lies,

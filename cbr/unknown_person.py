@@ -11,19 +11,19 @@ import numpy as np
 PERSON_QUANTILE = 0.1
 """Where a recording's distances to the case base and the case base's own held-out ones are
 compared (:func:`person_reach`, :func:`person_offset`): their nearest tenth, which a
-left-out movement inside the recording hardly reaches. Tried 0.1 and 0.25 on the one-person
-runs of :data:`NOVEL_CATCH` (unshrunk): the same on HDM05; UI-PRMD Vicon's seen blocks right
-/ left-out blocks unknown at catch 0.8 92 / 87 % at 0.1, 95 / 83 % at 0.25 (at 0.7: 98 / 83,
-98 / 79 %)."""
+left-out movement inside the recording hardly reaches. Tried against 0.25 on the one-person
+runs of :data:`NOVEL_CATCH` (unshrunk): the 25th percentile called fewer left-out blocks
+unknown (docs/measurements.md, "Figures behind the code's rules: The tenth quantile of a
+person's distances")."""
 
 
 PERSON_PRIOR = 8
 """How many windows' worth of no offset :func:`person_offset` starts from: a stream's first
 few windows (4 s at one every half second) show too little of the person to tell how far
 they lie, and in a short recording of nothing but a movement the case base lacks that
-movement would be taken for how far the person lies (CMU 13_30's 4.3 s of squats, with a
-case base of 13_29 and 13_31 without squats: 56 % of its blocks unknown unshrunk, at least
-80 % shrunk). It costs UI-PRMD Vicon's other people 6 points of seen blocks (92 -> 86 %)."""
+movement would be taken for how far the person lies. It costs other people a few points of
+seen blocks (docs/measurements.md, "Segmentation with one person's case base, and on other
+labs' people, measured")."""
 
 
 def person_reach(known: np.ndarray, basis: str) -> float:

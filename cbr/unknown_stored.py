@@ -38,12 +38,12 @@ calibration, already stored.)"""
 AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin", "spread-far")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
 case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
-``spread-margin``'s choice of power, rate and prior adds about 0.05-0.2 s of CPU to it
-(:func:`inner_grid`; UI-PRMD case bases of 120 to 4,252 cases); ``spread-far`` takes
-``spread-margin``'s and the held-out cases' nearest distances (:meth:`SpreadFar.bounding`).
-``activities`` measures every case against every other (grows with the square: 4 s of CPU
-on 4,252 cases, hours on the 100,000 of a 50,000-clip training set) and is calibrated when
-asked for, as before."""
+``spread-margin``'s choice of power, rate and prior adds a fraction of a second of CPU to it
+(:func:`inner_grid`); ``spread-far`` takes ``spread-margin``'s and the held-out cases' nearest
+distances (:meth:`SpreadFar.bounding`). ``activities`` measures every case against every
+other (grows with the square: seconds on thousands of cases, hours on the 100,000 of a
+50,000-clip training set) and is calibrated when asked for, as before (docs/measurements.md,
+"Figures behind the code's rules: A model's judges calibrated when stored")."""
 
 
 def calibrate_judges(cb: CaseBase, names: Sequence[str] = tuple(STORED)) -> dict[str, Calibrated]:

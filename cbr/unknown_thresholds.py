@@ -107,13 +107,12 @@ NOVEL_CATCH = 0.8
 """With one person in the case base, the share of its held-out cases of a left-out activity
 that the margin judge's thresholds still call unknown (:func:`one_person_floor`): the least
 threshold is the margin that this share of them exceed. Chosen with the person offset taken
-(:func:`for_person`) on case bases of one person (HDM05's actors, UI-PRMD's s01) segmenting
-the others (``python -m benchmarks.segment_people --train-people 1``), never on CMU; seen
-blocks named rightly / left-out blocks called unknown, with the offset unshrunk: 0.8 gave
-the best mean (HDM05 97 / 67 %, Vicon 92 / 87 %, Kinect 62 / 62 %), 0.7 less (97 / 52,
-98 / 83, 67 / 46 %), 0.9 lost HDM05's seen blocks (87 % right). As shipped (the offset
-shrunk, :data:`PERSON_PRIOR`): HDM05 97 / 68 %, Vicon 86 / 89 %, Kinect 62 / 64 %. Without
-the offset 0.5 was best: a new person's known margins rise towards the novel ones."""
+(:func:`for_person`) on case bases of one person segmenting the others (``python -m
+benchmarks.segment_people --train-people 1``): 0.8 gave the best mean of seen blocks named
+rightly and left-out blocks called unknown, 0.7 caught fewer left-out blocks, 0.9 lost seen
+ones. Without the offset 0.5 was best: a new person's known margins rise towards the novel
+ones (docs/measurements.md, "Segmentation with one person's case base, and on other labs'
+people, measured")."""
 
 
 def one_person_floor(novel: np.ndarray, basis: str) -> float:
@@ -126,8 +125,9 @@ def one_person_floor(novel: np.ndarray, basis: str) -> float:
 
     Held out from the same person, a known case lies nearer its activity than a new person's
     will: the budget of false unknowns read there is spent many times over on anyone else
-    (with one person's cases, another person's known blocks called unknown: HDM05 67 %,
-    UI-PRMD Vicon 100 %, Kinect 95 %). How far a new person's known movements lie the case
+    (with one person's cases and no floor, most of another person's known blocks are called
+    unknown: docs/measurements.md, "Segmentation with one person's case base, and on other
+    labs' people, measured"). How far a new person's known movements lie the case
     base cannot tell; how unlike a movement it lacks looks it can: its thresholds are raised
     until they call only :data:`NOVEL_CATCH` of those unknown."""
     if basis == "subject":

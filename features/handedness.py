@@ -20,11 +20,10 @@ way round the vertical, which changes no description (every direction is the bod
 about the vertical); one of y (upside down as well) is not told from lying exercises (a glute
 bridge's shoulders are below its hips) and stays upside down.
 
-Measured on the shared real data (1,600 UI-PRMD Kinect and 790 Vicon repetitions, 189 HDM05
-and 3 CMU takes, BlazePose pose files of the 10 videos and 3 stills): the median is between
-+0.37 (Kinect's noisy toes) and +0.998 on every recording as read, so none is touched;
-reflected, every one is at most -0.37 and every one is read back. Knees bending forward were
-a weaker cue (Kinect's knees: medians down to -0.98 on real clips) and are not used.
+On motion capture, depth-camera and video recordings the median lies well above 0 as read
+and well below it reflected; knees bending forward were a weaker cue (a depth camera's knees
+are noisy) and are not used (docs/measurements.md, "Figures behind the code's rules: Left-handed
+recordings").
 """
 
 from __future__ import annotations

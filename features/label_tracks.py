@@ -1,5 +1,6 @@
 """Recordings labelled over time: label files (one label per frame, or per block of seconds,
-as in cmu-mocap6/truelabels), the files naming their codes, and the label of every frame.
+as Fox et al.'s labels of CMU recordings), the files naming their codes, and the label of
+every frame.
 
 - :class:`LabelTrack`: how a recording is labelled (label file, block length, names file);
 - :func:`read_label_track`, :func:`read_label_names`: the files read, refusing what would put
@@ -143,7 +144,8 @@ def code_order(code: str) -> tuple[int, int, str]:
 
 def read_label_track(path: str | Path, names: dict[str, str] | None = None) -> list[str]:
     """The labels of a label file in order: tokens separated by spaces, tabs, commas or line
-    ends (as in cmu-mocap6/truelabels; ``#`` starts a comment, as in a label names file),
+    ends (as in Fox et al.'s labels of CMU recordings; ``#`` starts a comment, as in a label
+    names file),
     each mapped through ``names`` when given. Raises DataError for an empty or unreadable
     file or a code ``names`` does not name."""
     path = Path(path)
@@ -400,8 +402,8 @@ def frame_labels(
 
     The count must fit the recording: one label per block, the last block possibly partial;
     one more label is accepted when the frames fill the last block exactly (a label for the
-    recording's end time as well as its start: the cmu-mocap6 label files were made that
-    way), so a file of one label per frame may hold one more than there are frames, and no
+    recording's end time as well as its start: some label files are made
+    that way), so a file of one label per frame may hold one more than there are frames, and no
     more. Labels are per time: they must reach the last frame's time, not the end of its
     frame, so a recording thinned below one frame per block (CMU at 2 fps, 0.1-s labels made
     at 120 fps) takes the labels of its whole length, whose end lies within its last frame's

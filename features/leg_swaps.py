@@ -5,8 +5,9 @@ the front leg for the back one for a few tenths of a second and back: within a f
 each leg lands where the other was (in the body's sagittal plane: the model keeps each leg's
 side across the body and guesses that depth anew), and the hips turn with them. The knee and
 hip angles, the trunk's twist and the hips' height then jump away and back, a dip as deep as
-a repetition (the bundled reverse lunge, held in its split stance from 6 to 8 s: swapped for
-0.28 and 0.44 s, read as a lunge down and up again). The running median and
+a repetition (a split stance held for two seconds, swapped for a few tenths of a second
+twice, read as a lunge down and up again: docs/measurements.md, "The legs swapped for longer
+than a glitch"). The running median and
 :func:`features.repetitions._drop_glitches` only put back runs shorter than half the shortest
 repetition; these outlast it.
 

@@ -133,9 +133,10 @@ def _angles(p: np.ndarray) -> np.ndarray:
         hip, knee, ankle = j(f"{side}_hip"), j(f"{side}_knee"), j(f"{side}_ankle")
         # The outward axis: the body's left-right axis, pointing away from the body on this
         # side. Not the paper's ⊥²torso of the side, (shoulder→hip) × ⊥torso, which leans
-        # with that side's shoulder-to-hip line (10-18° on UI-PRMD's skeletons, the shoulders
-        # wider than the hip joints) and would read an arm hanging straight down as half
-        # "outward" (SPEC: meaning wins over the literal vector).
+        # with that side's shoulder-to-hip line (the shoulders wider than the hip joints;
+        # docs/measurements.md, "Figures behind the code's rules: A limb's outward axis") and
+        # would read an arm hanging straight down as half "outward" (SPEC: meaning wins over
+        # the literal vector).
         outward = sign * bf.left
         upper_arm, upper_leg = el - sh, knee - hip
         cols[f"{side}_elbow"] = joint_angle(sh, el, wr)

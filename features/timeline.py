@@ -648,7 +648,7 @@ def _key(tl: Timeline, rows: np.ndarray) -> list[str]:
     """What the shades and colours of a timeline picture mean, for its title: "orange labels
     = motion" only when a motion state's row is drawn. Before, a picture given a title of its
     own (``segment``'s, ``reps``', ``describe``'s: the recording's name) lost the key of the
-    untitled picture: ``reps --plot`` of CMU 13_31 drew 19 row labels in orange, unexplained."""
+    untitled picture: ``reps --plot`` drew its row labels in orange, unexplained."""
     key = ["shade = confidence", "grey = unknown"]
     if any(tl.layout.temporal[i] for i in rows):
         key.append("orange labels = motion")

@@ -203,11 +203,10 @@ def note_low_rate(source: Any, fps: float, estimated: bool) -> None:
     repetition's far point is held for less than the two frames a running median of three
     keeps: where the counter reads one (:func:`features.repetitions.median_width`: always
     for poses a pose model ``estimated``, whose one-frame glitches it drops; for others,
-    motion capture, from 7.5 fps), the counts are noted as well. Every k-th frame kept (four
-    phases each), the 8 hand-counted bundled videos were counted exactly in 100 % of their
-    copies at 15 fps, 89 % at 8, 88 % at 6 and 86 % at 5; the 28 mocap clips of known count
-    of the repetition tests in 92, 89 and 86 % at 15, 10 and 8 fps, 98 and 93 % at 6 and 5
-    with no median and no glitch to drop (91 % at 30 fps): not noted."""
+    motion capture, from 7.5 fps), the counts are noted as well; motion capture, read below
+    7.5 fps with no median and no glitch to drop, counts about as well as at 30 fps: not
+    noted (docs/measurements.md, "Figures behind the code's rules: Repetitions counted below
+    10 fps")."""
     from features.repetitions import MIN_PERIOD_S, glitch_free_fps, median_width
     from features.text import shown
 

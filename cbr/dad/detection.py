@@ -61,8 +61,9 @@ class DADConfig:
     qmp: QMPConfig = field(default_factory=QMPConfig)
     min_observable_share: float = 0.5
     """An activity is scored only when at least this share of its QMPs' weight is observable
-    (on Kinect, Vicon, HDM05 and BlazePose skeletons every shipped activity has 87 % or more;
-    a clip with a knee missing throughout would otherwise crown a kick from its arms alone)."""
+    (on a whole skeleton every shipped activity has far more: docs/measurements.md, "Figures
+    behind the code's rules: Observable QMPs"; a clip with a knee missing throughout would
+    otherwise crown a kick from its arms alone)."""
 
     def __post_init__(self) -> None:
         for name in ("window_s", "step_s", "min_duration_s"):

@@ -4,27 +4,18 @@ Kinect files (``m01_s01_e01_positions.txt[.gz]`` with its ``..._angles.txt[.gz]`
 22 joints x 3 comma-separated columns per row, centimetres, y up. The Waist row is absolute;
 every other row is the offset of a joint from its parent in the parent's rotated frame, and the
 angles file holds three Euler angles (degrees) per joint. The rotation order is not documented
-upstream. We tried all 12 Euler orders on real clips (intrinsic and extrinsic, on the
-columns as stored), and for the plausible ones also the offset rotated by the joint's own
-rotation instead of its parent's, and the inverse rotations. The one kept below,
-``R = Rz(c3) @ Ry(c2) @ Rx(c1)`` applied as ``pos(child) = R_global(parent) @ offset + pos(parent)``
-with ``R_global(child) = R_global(parent) @ R(child)`` (the order the data README inferred),
-is the only one that passed every check (16 clips per movement, subjects s01-s08):
-
-- shoulders on the correct side (the person's left judged from where the toes point), over
-  the deep squat and shoulder abduction clips: 99.6 % of frames; five orders fall to 81-95 %
-  on average and 46-72 % on their worst clip;
-- in deep squats the bent knees move forward of the hip-ankle line: 96 % of bent frames; the
-  other orders that keep left and right 43-94 %, mostly about 50 % (knees bending sideways or
-  backwards);
-- the ankles stay still while standing in shoulder abduction: 0.3 cm mean drift, the other
-  orders 0.8-2.2 cm;
-- rotating the offset by the joint's own rotation puts the ankles 20-40 cm below the floor in
-  squats; the head is 1.4-1.6 m above the feet when standing.
+upstream. Of all 12 Euler orders (intrinsic and extrinsic, on the columns as stored), and for
+the plausible ones also the offset rotated by the joint's own rotation instead of its
+parent's and the inverse rotations, the one kept below, ``R = Rz(c3) @ Ry(c2) @ Rx(c1)``
+applied as ``pos(child) = R_global(parent) @ offset + pos(parent)`` with
+``R_global(child) = R_global(parent) @ R(child)``, is the only one that passed every check:
+the shoulders on the side the toes say, the bent knees of a deep squat forward of the
+hip-ankle line, the ankles still while standing, the feet on the floor and the head above
+them (docs/measurements.md, "Figures behind the code's rules: UI-PRMD Kinect's rotation
+order and Vicon's gaps"; ``tests/test_readers_uiprmd.py`` repeats these checks).
 
 Bone lengths are not a discriminator: a rotated offset keeps its length, and Kinect
-re-estimates the offsets every frame (a thigh varies by a standard deviation of 1-3 cm within
-a clip). ``tests/test_readers_uiprmd.py`` repeats these checks.
+re-estimates the offsets every frame.
 
 Kinect -> BlazePose (a joint Kinect does not track stays NaN):
 
@@ -315,8 +306,7 @@ def read_uiprmd_vicon_markers(path: str | Path) -> np.ndarray:
     """
     path = Path(path)
     raw = read_csv_matrix(path, len(VICON_MARKERS) * 3).reshape(-1, len(VICON_MARKERS), 3)
-    # Vicon writes an occluded marker as exactly (0, 0, 0) (36 of the 790 files here have
-    # such gaps): a gap, not a point at the origin.
+    # Vicon writes an occluded marker as exactly (0, 0, 0): a gap, not a point at the origin.
     raw[(raw == 0).all(axis=2)] = np.nan
     return raw[..., [1, 2, 0]] / 1000.0
 
@@ -331,9 +321,10 @@ def fill_rigid_gaps(markers: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     fill: a template of the segment (the fully visible frame whose inter-marker distances are
     closest to their medians) is fitted to the visible markers by least squares (Kabsch,
     vectorised over frames), and the missing marker is taken from the fitted template. Frames
-    with two or more of them missing, or a segment never fully visible, stay NaN. Measured on
-    the pelvis by hiding a visible marker: 1-3 mm error while standing; in deep squats median
-    6-12 mm and up to 6 cm at full hip flexion, where the skin over the ASIS slides.
+    with two or more of them missing, or a segment never fully visible, stay NaN. A few
+    millimetres off while standing, up to centimetres at full hip flexion, where the skin over
+    the ASIS slides (docs/measurements.md, "Figures behind the code's rules: UI-PRMD Kinect's
+    rotation order and Vicon's gaps").
     """
     out = markers.copy()
     ix = [VICON_MARKERS.index(n) for n in names]

@@ -36,7 +36,8 @@ TOP = 5
 
 LONG_CLIP_S = 10.0
 """A clip longer than this is noted: DAD gives it one answer, as ``classify`` notes a clip
-longer than 10 s against a case base of windows (no UI-PRMD or HDM05 clip lasts so long)."""
+longer than 10 s against a case base of windows (a clip of one exercise's repetitions lasts
+less)."""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -117,8 +118,8 @@ def run(args: argparse.Namespace) -> int:
 def _note_long_clip(name: str, seconds: float) -> None:
     """Note, on stderr, that a long clip gets one answer: its activities' QMPs are sought in
     order across all its windows, so a recording of several exercises meets many activities
-    in full (CMU 13_31, seven exercises in 25 s: seven activities at 100 %, none of its
-    own)."""
+    in full, not its own among them (docs/measurements.md, "Figures behind the code's rules:
+    DAD on a long recording")."""
     print(
         shown(
             f"note: {name} lasts {seconds:.1f} s, longer than {LONG_CLIP_S:g} s: DAD gives the"

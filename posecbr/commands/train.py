@@ -786,9 +786,9 @@ def _default_split(args: argparse.Namespace) -> str:
     (``--frame-labels``, a labels CSV with a ``label_file``), as ``segment`` and ``watch`` cut
     the recordings they label, else the clip. A labelled stretch of a long recording is many
     repetitions: as one case, the few cases of each activity lie far from any window, and
-    from a new stretch too (CMU subject 13, each recording against the other two: 33-61 % of
-    its 0.1-s blocks segmented right, 10 of its 18 seen stretches classified right, against
-    94-99 % and 18 of 18 with a case per window)."""
+    from a new stretch too, and both segment and classify far worse than with a case per
+    window (docs/measurements.md, "Figures behind the code's rules: A case per labelled
+    stretch against a case per window")."""
     if not args.over_time:
         return "clips"
     if args.scheduler is not None:
@@ -809,10 +809,9 @@ def _note_cut_stretches(args: argparse.Namespace, entries: list[Any]) -> None:
     """A note when the clips, one case each by default, are labelled stretches that
     ``convert`` cut from recordings labelled over time (pose files whose metadata names the
     recording they came from and where in it they start), each long enough to hold several
-    repetitions: such a stretch as one case lies far from any window (CMU subject 13: 33-61 %
-    of a recording's blocks segmented right, against 94-99 % with windows), so ``train`` of
-    the labels CSV that cut them makes a case per window. A file that cannot be read is left
-    to the training to refuse."""
+    repetitions: such a stretch as one case lies far from any window (:func:`_default_split`),
+    so ``train`` of the labels CSV that cut them makes a case per window. A file that cannot
+    be read is left to the training to refuse."""
     from features.datasets import POSE_SUFFIXES
     from features.errors import PoseFileError
     from features.poses import pose_file_length, pose_file_metadata
