@@ -39,7 +39,7 @@ class EmptyStore(StoreError):
 class InterruptedWrite(StoreError):
     """A SQLite file whose last writer was killed inside a transaction: its ``-journal``
     holds what to undo, which a command that only reads does not write
-    (:func:`roll_back_interrupted` does)."""
+    (:func:`casebase_store.journals.roll_back_interrupted` does)."""
 
 
 class CaseBaseGone(StoreError):

@@ -36,9 +36,9 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
     """Undo the transaction a killed writer left in a SQLite file (its ``-journal``), as
     SQLite does when a connection that may write opens it: for a command that will write,
     which reads the store read-only first (a read-only connection cannot undo it and fails
-    with :class:`InterruptedWrite`). Returns whether one was undone; nothing happens to a
-    file without such a journal, another backend, or a transaction another process is still
-    writing (SQLite undoes only a journal whose writer is gone)."""
+    with :class:`casebase_store.errors.InterruptedWrite`). Returns whether one was undone;
+    nothing happens to a file without such a journal, another backend, or a transaction another
+    process is still writing (SQLite undoes only a journal whose writer is gone)."""
     file = sqlite_file(url_or_path)
     if file is None:
         return False

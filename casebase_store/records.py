@@ -78,9 +78,10 @@ class StoredCase:
 
 @dataclass(frozen=True)
 class SourcedCase:
-    """One case with its provenance, as :meth:`StoreTransaction.cases_framed` finds it;
-    ``poses``: the digest of its clip's poses, None when not known (stored before it was kept,
-    or in a store made before, which has no place for it)."""
+    """One case with its provenance, as
+    :meth:`casebase_store.store.StoreTransaction.cases_framed` finds it; ``poses``: the digest
+    of its clip's poses, None when not known (stored before it was kept, or in a store made
+    before, which has no place for it)."""
 
     id: int
     source: str
@@ -122,11 +123,11 @@ class MaintenanceEntry:
 @dataclass(frozen=True)
 class WholeCaseBase:
     """Everything one case base is, as its store holds it, for copying it to another store
-    exactly (:meth:`CaseStore.read_whole`, :meth:`StoreTransaction.copy_case_base`): its
-    description, its columns as stored (the configuration, names and model as their JSON
-    text, byte for byte), every case, in use or trimmed, by id (its problem as its stored
-    ``.npy`` bytes), the cached representations of its cases and its maintenance log, in
-    order. Dates are UTC."""
+    exactly (:meth:`casebase_store.store.CaseStore.read_whole`,
+    :meth:`casebase_store.store.StoreTransaction.copy_case_base`): its description, its columns
+    as stored (the configuration, names and model as their JSON text, byte for byte), every
+    case, in use or trimmed, by id (its problem as its stored ``.npy`` bytes), the cached
+    representations of its cases and its maintenance log, in order. Dates are UTC."""
 
     info: CaseBaseInfo
     columns: dict[str, Any]

@@ -13,9 +13,9 @@ The judges, each calibrated on the case base itself, never on what is being segm
   activity, and the threshold is the one that at most :data:`FALSE_UNKNOWN` of them exceed
   (:func:`false_unknown_threshold`): a budget of false "unknown" on people the case base
   has not seen. (Held out from its own activity too, a case gives a *novel* margin; the
-  point where both err equally, :func:`equal_error_threshold`, depends on which activities
-  happen to be left out and, set there, called a third of new people's known movements
-  unknown.) A ratio of distances needs no common unit, so a new person who lies farther
+  point where both err equally, :func:`cbr.unknown_thresholds.equal_error_threshold`, depends on
+  which activities happen to be left out and, set there, called a third of new people's known
+  movements unknown.) A ratio of distances needs no common unit, so a new person who lies farther
   from every case is not called unknown for that alone.
 - :class:`ActivityMargin` (``--unknown activity-margin``; the default before
   :class:`SpreadMargin`): the margin
@@ -44,8 +44,9 @@ The judges, each calibrated on the case base itself, never on what is being segm
 - With a case base of one person (held out by recording or by time, not by person), the two
   margin judges also have a floor (:func:`one_person_floor`) and see each recording's
   distances less how much farther its person lies from every case than the case base's own
-  held-out cases (:func:`for_person`, :class:`Offset`): a threshold read from one person
-  cannot know how far the next one lies, but the recording's nearest windows can tell.
+  held-out cases (:func:`cbr.unknown.for_person`, :class:`cbr.unknown.Offset`): a threshold read
+  from one person cannot know how far the next one lies, but the recording's nearest windows can
+  tell.
 - :class:`HeldOut`: the classifier's stored calibration (:mod:`cbr.novelty`, the distance
   score of the flag ``classify`` gives; its feature score needs a clip's answer): the nearest
   case lies farther than held-out training clips nearly ever do.
@@ -120,9 +121,9 @@ def two_nearest(nearest: np.ndarray, classes: Sequence[str]) -> tuple[str, str]:
 
 
 HELD_OUT_ADVICE = "use `name='held-out'`"
-"""What a refusal to calibrate a margin judge advises: :func:`judge_of`'s ``name`` (the
+"""What a refusal to calibrate a margin judge advises: :func:`cbr.unknown.judge_of`'s ``name`` (the
 commands say ``--unknown held-out``); a Python caller given the default judge is told the
-call instead (:func:`default_judge`)."""
+call instead (:func:`cbr.unknown.default_judge`)."""
 
 
 def _check_margin_calibration(cb: CaseBase) -> None:
@@ -154,8 +155,8 @@ class Margin(Calibrated):
     stored before it); ``basis``: how training cases were held out; ``known``/``novel``: how
     many margins of each kind were measured; ``reach``: how near held-out known cases lie to
     their nearest case, against which a recording's person offset is measured
-    (:func:`person_reach`, :func:`for_person`; inf, no offset, when the case base holds out
-    people, and in a record stored before it)."""
+    (:func:`person_reach`, :func:`cbr.unknown.for_person`; inf, no offset, when the case base
+    holds out people, and in a record stored before it)."""
 
     threshold: float
     basis: str
@@ -273,10 +274,11 @@ class ActivityMargin(Calibrated):
     threshold) lies below it (:func:`one_person_floor`); 0 otherwise, and in a record stored
     before it. ``reach``: as :class:`Margin`'s. ``activities``: the names (as text) of the
     activities the values per activity are of, in their order (the case base's labels sorted
-    as text when calibrated; the classifier's class order once :func:`judge_of` gives it), so
-    that another classifier's judge is refused (:func:`cbr.segmentation.check_judge`); empty
-    in a record stored before it (:func:`judge_of` names them: a stored judge was calibrated
-    on the classifier's own cases)."""
+    as text when calibrated; the classifier's class order once :func:`cbr.unknown.judge_of`
+    gives it), so that another classifier's judge is refused
+    (:func:`cbr.segmentation.check_judge`); empty in a record stored before it
+    (:func:`cbr.unknown.judge_of` names them: a stored judge was calibrated on the classifier's
+    own cases)."""
 
     thresholds: tuple[float, ...]
     pooled: float
@@ -459,8 +461,8 @@ class SpreadFar(SpreadMargin):
     held-out known case lies is unlike them, however clearly nearer one activity than the
     next (a margin judge sees only the ratio). With a case base of one person the bound is
     read the same way and the judge, as :class:`ActivityMargin`, sees the distances less the
-    person offset (:func:`for_person`): the bound is compared with those. ``far`` inf (the
-    judge is :class:`SpreadMargin`) in a record without it or when no held-out case is
+    person offset (:func:`cbr.unknown.for_person`): the bound is compared with those. ``far``
+    inf (the judge is :class:`SpreadMargin`) in a record without it or when no held-out case is
     known."""
 
     far: float = math.inf

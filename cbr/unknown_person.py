@@ -12,9 +12,9 @@ PERSON_QUANTILE = 0.1
 """Where a recording's distances to the case base and the case base's own held-out ones are
 compared (:func:`person_reach`, :func:`person_offset`): their nearest tenth, which a
 left-out movement inside the recording hardly reaches. Tried against 0.25 on the one-person
-runs of :data:`NOVEL_CATCH` (unshrunk): the 25th percentile called fewer left-out blocks
-unknown (docs/measurements.md, "Figures behind the code's rules: The tenth quantile of a
-person's distances")."""
+runs of :data:`cbr.unknown_thresholds.NOVEL_CATCH` (unshrunk): the 25th percentile called fewer
+left-out blocks unknown (docs/measurements.md, "Figures behind the code's rules: The tenth
+quantile of a person's distances")."""
 
 
 PERSON_PRIOR = 8

@@ -20,19 +20,21 @@ class Calibrated:
     plain record of its fields (:meth:`to_dict`, :meth:`from_dict`), so that ``segment`` and
     ``watch`` read it instead of scanning the case base each run. Generic over the fields: a
     new field (with a default, which a record stored before it takes) or a new judge (one
-    line in :data:`STORED`) needs no code here. Fields are ``float`` (>= 0, not NaN; +inf is
-    written ``"inf"``: JSON has none), ``int`` (>= 0), ``str``, ``tuple[float, ...]`` (a
-    list of such numbers) or ``tuple[str, ...]`` (a list of texts).
+    line in :data:`cbr.unknown_stored.STORED`) needs no code here. Fields are ``float`` (>= 0,
+    not NaN; +inf is written ``"inf"``: JSON has none), ``int`` (>= 0), ``str``, ``tuple[float,
+    ...]`` (a list of such numbers) or ``tuple[str, ...]`` (a list of texts).
 
     A field added once posecbr stored judges, which a reader that does not know it can do
     without, is marked ``metadata={ADDED: True}``: it is stored apart from the record
-    (:func:`judges_apart`), where an older posecbr does not look (its reader refuses a record
-    with a field it does not know: "unknown field 'activities'"), and a field stored apart
-    that this reader does not know (a newer posecbr's) is ignored (:meth:`from_dict`)."""
+    (:func:`cbr.unknown_stored.judges_apart`), where an older posecbr does not look (its reader
+    refuses a record with a field it does not know: "unknown field 'activities'"), and a field
+    stored apart that this reader does not know (a newer posecbr's) is ignored
+    (:meth:`from_dict`)."""
 
     @classmethod
     def of(cls: type[_C], cb: CaseBase, *, held: Held | None = None) -> _C:
-        """Calibrated on ``cb`` (``held``: its :func:`held_out_activities`, when measured)."""
+        """Calibrated on ``cb`` (``held``: its :func:`cbr.unknown_held_out.held_out_activities`,
+        when measured)."""
         raise NotImplementedError
 
     def to_dict(self) -> dict[str, Any]:
@@ -45,10 +47,11 @@ class Calibrated:
     @classmethod
     def from_dict(cls: type[_C], d: Mapping[str, Any], added: Any = None) -> _C:
         """The judge :meth:`to_dict` wrote (``d``), with the fields stored apart from it
-        (``added``: :func:`judges_apart`; a field of it this reader does not know, a newer
-        posecbr's, is ignored). ValueError naming the field for a record that is not one: an
-        unknown field in ``d``, a missing one without a default, a wrong type, a negative or
-        NaN number, a field stored both in ``d`` and apart or apart though not marked so."""
+        (``added``: :func:`cbr.unknown_stored.judges_apart`; a field of it this reader does not
+        know, a newer posecbr's, is ignored). ValueError naming the field for a record that is
+        not one: an unknown field in ``d``, a missing one without a default, a wrong type, a
+        negative or NaN number, a field stored both in ``d`` and apart or apart though not
+        marked so."""
         if not isinstance(d, Mapping):
             raise ValueError(f"a stored judge must be a record of fields, got {d!r}")
         fields = {f.name: f for f in dataclasses.fields(typing.cast(Any, cls))}

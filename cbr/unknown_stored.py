@@ -37,13 +37,14 @@ calibration, already stored.)"""
 
 AT_FIT = ("margin", "margin-distance", "activity-margin", "spread-margin", "spread-far")
 """The judges calibrated when a model is stored: the margins, from one held-out scan of the
-case base for at most :data:`MARGIN_SAMPLE` cases (grows linearly with the case base);
-``spread-margin``'s choice of power, rate and prior adds a fraction of a second of CPU to it
-(:func:`inner_grid`); ``spread-far`` takes ``spread-margin``'s and the held-out cases' nearest
-distances (:meth:`SpreadFar.bounding`). ``activities`` measures every case against every
-other (grows with the square: seconds on thousands of cases, hours on the 100,000 of a
-50,000-clip training set) and is calibrated when asked for, as before (docs/measurements.md,
-"Figures behind the code's rules: A model's judges calibrated when stored")."""
+case base for at most :data:`cbr.unknown_held_out.MARGIN_SAMPLE` cases (grows linearly with the
+case base); ``spread-margin``'s choice of power, rate and prior adds a fraction of a second of
+CPU to it (:func:`cbr.unknown_weights.inner_grid`); ``spread-far`` takes ``spread-margin``'s and
+the held-out cases' nearest distances (:meth:`SpreadFar.bounding`). ``activities`` measures
+every case against every other (grows with the square: seconds on thousands of cases, hours on
+the 100,000 of a 50,000-clip training set) and is calibrated when asked for, as before
+(docs/measurements.md, "Figures behind the code's rules: A model's judges calibrated when
+stored")."""
 
 
 def calibrate_judges(cb: CaseBase, names: Sequence[str] = tuple(STORED)) -> dict[str, Calibrated]:
@@ -75,9 +76,10 @@ def judges_apart(
     judges: Mapping[str, Calibrated],
 ) -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, Any]]]:
     """The calibrated judges as JSON-ready records by name (:func:`judges_to_dict`) without
-    the fields marked :data:`ADDED`, and those fields by name (judges with none left out):
-    what a posecbr stores, so that one older than such a field reads the records (it refuses
-    a field it does not know) and ignores the rest. :func:`judges_from_dict` joins them."""
+    the fields marked :data:`cbr.unknown_records.ADDED`, and those fields by name (judges with
+    none left out): what a posecbr stores, so that one older than such a field reads the records
+    (it refuses a field it does not know) and ignores the rest. :func:`judges_from_dict` joins
+    them."""
     records: dict[str, dict[str, Any]] = {}
     apart: dict[str, dict[str, Any]] = {}
     for name, judge in judges.items():

@@ -21,10 +21,10 @@ unknown: its threshold is their margins' ``1 - FALSE_UNKNOWN`` quantile."""
 
 ACTIVITY_PRIOR = 1.0 / FALSE_UNKNOWN
 """How many held-out cases the pooled threshold counts for in an activity's own threshold
-(:func:`activity_thresholds`) when the case base cannot choose it (:func:`choose_weight`: no
-activity has held-out cases in two groups): 1 / :data:`FALSE_UNKNOWN` (20), the number of
-cases at which the budget reaches one case. Also the weight of :class:`ActivityMargin`
-records stored before the weight was chosen."""
+(:func:`activity_thresholds`) when the case base cannot choose it
+(:func:`cbr.unknown_weights.choose_weight`: no activity has held-out cases in two groups): 1 /
+:data:`FALSE_UNKNOWN` (20), the number of cases at which the budget reaches one case. Also the
+weight of :class:`cbr.unknown_judges.ActivityMargin` records stored before the weight was chosen."""
 
 
 def margin_of(nearest: np.ndarray) -> float:
@@ -62,9 +62,10 @@ def false_unknown_threshold(known: np.ndarray, rate: float = FALSE_UNKNOWN) -> f
 def calibration_margins(
     cb: CaseBase, sample: int = MARGIN_SAMPLE, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, str]:
-    """The margins of training cases held out (:func:`held_out_basis`) with their activity in
-    the case base (``known``) and without it (``novel``), and the basis. A seeded sample of at
-    most ``sample`` real cases (not mirror images) is held out, each against all cases."""
+    """The margins of training cases held out (:func:`cbr.unknown_held_out.held_out_basis`) with
+    their activity in the case base (``known``) and without it (``novel``), and the basis. A
+    seeded sample of at most ``sample`` real cases (not mirror images) is held out, each against
+    all cases."""
     seen, codes, basis, _ = held_out_activities(cb, sample, seed)
     known, novel = known_and_novel(seen, codes)
     return margins_of(known), margins_of(novel), basis
@@ -82,7 +83,8 @@ def margins_of(nearest: np.ndarray) -> np.ndarray:
 
 
 JOINT_GRID = np.linspace(0.5, 1.0, 101)
-"""The quantiles tried for the joint rule of :class:`MarginDistance`, lowest first."""
+"""The quantiles tried for the joint rule of :class:`cbr.unknown_judges.MarginDistance`, lowest
+first."""
 
 
 def joint_thresholds(
@@ -107,7 +109,7 @@ NOVEL_CATCH = 0.8
 """With one person in the case base, the share of its held-out cases of a left-out activity
 that the margin judge's thresholds still call unknown (:func:`one_person_floor`): the least
 threshold is the margin that this share of them exceed. Chosen with the person offset taken
-(:func:`for_person`) on case bases of one person segmenting the others (``python -m
+(:func:`cbr.unknown.for_person`) on case bases of one person segmenting the others (``python -m
 benchmarks.segment_people --train-people 1``): 0.8 gave the best mean of seen blocks named
 rightly and left-out blocks called unknown, 0.7 caught fewer left-out blocks, 0.9 lost seen
 ones. Without the offset 0.5 was best: a new person's known margins rise towards the novel
@@ -116,12 +118,12 @@ people, measured")."""
 
 
 def one_person_floor(novel: np.ndarray, basis: str) -> float:
-    """The least threshold of :class:`ActivityMargin` and :class:`Margin` when the case base
-    cannot hold out a person (``basis`` not "subject": its cases are held out from their own
-    recording, or from the frames of their own that overlap them): the margin that
-    :data:`NOVEL_CATCH` of the held-out cases with their own activity left out exceed (their
-    margins ``novel`` ``(n,)``, of :func:`known_and_novel`); 0 when it can (basis "subject")
-    or no such case is there.
+    """The least threshold of :class:`cbr.unknown_judges.ActivityMargin` and
+    :class:`cbr.unknown_judges.Margin` when the case base cannot hold out a person (``basis``
+    not "subject": its cases are held out from their own recording, or from the frames of their
+    own that overlap them): the margin that :data:`NOVEL_CATCH` of the held-out cases with their
+    own activity left out exceed (their margins ``novel`` ``(n,)``, of :func:`known_and_novel`);
+    0 when it can (basis "subject") or no such case is there.
 
     Held out from the same person, a known case lies nearer its activity than a new person's
     will: the budget of false unknowns read there is spent many times over on anyone else
@@ -138,12 +140,12 @@ def one_person_floor(novel: np.ndarray, basis: str) -> float:
 def activity_thresholds(
     margins: np.ndarray, activities: np.ndarray, n_classes: int, rate: float, prior: float
 ) -> tuple[np.ndarray, float]:
-    """Per activity ``(n_classes,)``, the threshold of :class:`ActivityMargin`, and the pooled
-    one: from held-out known ``margins`` ``(n,)`` (non-empty) of cases of ``activities``
-    ``(n,)`` (indices), the pooled threshold ``t`` (:func:`false_unknown_threshold` at
-    ``rate``) and each activity's own ``t_a`` from its ``n_a`` margins, shrunk:
-    ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for an activity without margins, and for
-    every activity when ``prior`` is inf."""
+    """Per activity ``(n_classes,)``, the threshold of
+    :class:`cbr.unknown_judges.ActivityMargin`, and the pooled one: from held-out known
+    ``margins`` ``(n,)`` (non-empty) of cases of ``activities`` ``(n,)`` (indices), the pooled
+    threshold ``t`` (:func:`false_unknown_threshold` at ``rate``) and each activity's own
+    ``t_a`` from its ``n_a`` margins, shrunk: ``(n_a t_a + prior t) / (n_a + prior)``; ``t`` for
+    an activity without margins, and for every activity when ``prior`` is inf."""
     pooled = false_unknown_threshold(margins, rate)
     out = np.full(n_classes, pooled)
     if math.isinf(prior):

@@ -35,17 +35,18 @@ def inner_scores(
     weights: Sequence[Weight],
     power: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """For each ``(rate, prior)`` of ``weights``, how :class:`ActivityMargin`'s thresholds set
-    from the other groups' held-out cases fare on each group's own, every group (subject or
-    recording) held out in turn, as a new person is; from held-out cases' distances to every
-    activity ``(n, n_classes)``, their activities and groups ``(n,)`` each. ``over``: the
-    share of the held-out group's rightly named known cases above their activity's
-    threshold; ``caught``: the share of its cases of an activity ``a`` above the threshold
-    of their nearest other activity when ``a`` is gone (its column and its cases left out of
-    the thresholds too, as from a case base without it). Both ``(len(weights),)``; 0 where
-    there is nothing to count. ``power``: the margins are :class:`SpreadMargin`'s scores of
-    that power (:func:`spread_scores`), each activity's spread read from the other groups'
-    cases as the thresholds are; 0, the margins themselves."""
+    """For each ``(rate, prior)`` of ``weights``, how
+    :class:`cbr.unknown_judges.ActivityMargin`'s thresholds set from the other groups' held-out
+    cases fare on each group's own, every group (subject or recording) held out in turn, as a
+    new person is; from held-out cases' distances to every activity ``(n, n_classes)``, their
+    activities and groups ``(n,)`` each. ``over``: the share of the held-out group's rightly
+    named known cases above their activity's threshold; ``caught``: the share of its cases of an
+    activity ``a`` above the threshold of their nearest other activity when ``a`` is gone (its
+    column and its cases left out of the thresholds too, as from a case base without it). Both
+    ``(len(weights),)``; 0 where there is nothing to count. ``power``: the margins are
+    :class:`cbr.unknown_judges.SpreadMargin`'s scores of that power (:func:`spread_scores`),
+    each activity's spread read from the other groups' cases as the thresholds are; 0, the
+    margins themselves."""
     over, caught = inner_grid(seen, codes, groups, weights, (power,))
     return over[0], caught[0]
 
@@ -97,11 +98,11 @@ def choose_weight(
     seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, budget: float = FALSE_UNKNOWN
 ) -> Weight:
     """The quantile rate (a share of ``budget``, :data:`RATE_SHARES`) and the prior
-    (:data:`PRIOR_GRID`) of :class:`ActivityMargin`'s thresholds, chosen on the held-out cases
-    themselves (:func:`inner_scores`; arguments as there): of those whose thresholds, set from
-    the other groups, the held-out group's known cases exceed no more often than ``budget``,
-    the one that calls most of a gone activity's cases unknown (on a tie the larger rate,
-    then the larger prior: the less tuned). An activity's own quantile, read from a few
+    (:data:`PRIOR_GRID`) of :class:`cbr.unknown_judges.ActivityMargin`'s thresholds, chosen on
+    the held-out cases themselves (:func:`inner_scores`; arguments as there): of those whose
+    thresholds, set from the other groups, the held-out group's known cases exceed no more often
+    than ``budget``, the one that calls most of a gone activity's cases unknown (on a tie the
+    larger rate, then the larger prior: the less tuned). An activity's own quantile, read from a few
     people, is exceeded more often by the next person than the pooled one: the prior and the
     rate are what keep the budget on people the thresholds were not set from. The least
     over-call when none keeps it; ``(budget, ACTIVITY_PRIOR)`` when no activity has
@@ -121,7 +122,7 @@ def choose_weight(
 
 SPREAD_POWERS = (0.0, 0.5, 1.0, 2.0, 4.0)
 """The powers of the spread :func:`choose_spread` tries (0: the margin alone, as
-:class:`ActivityMargin`'s)."""
+:class:`cbr.unknown_judges.ActivityMargin`'s)."""
 
 
 def activity_spreads(seen: np.ndarray, codes: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -139,9 +140,10 @@ def activity_spreads(seen: np.ndarray, codes: np.ndarray, rows: np.ndarray) -> n
 
 
 def spread_scores(nearest: np.ndarray, spreads: np.ndarray, power: float) -> np.ndarray:
-    """:class:`SpreadMargin`'s score of every row of ``nearest`` ``(n, n_classes)`` (distances
-    to every activity): the margin ``d1 / d2`` times ``(d1 / s) ** power``, ``s`` the spread
-    (:func:`activity_spreads`, ``(n_classes,)``) of the row's nearest activity. ``(n,)``."""
+    """:class:`cbr.unknown_judges.SpreadMargin`'s score of every row of ``nearest`` ``(n,
+    n_classes)`` (distances to every activity): the margin ``d1 / d2`` times ``(d1 / s) **
+    power``, ``s`` the spread (:func:`activity_spreads`, ``(n_classes,)``) of the row's nearest
+    activity. ``(n,)``."""
     nearest = np.asarray(nearest, dtype=np.float64)
     m = margins_of(nearest)
     if not power or not len(nearest):
@@ -166,10 +168,10 @@ def _scored(margins: np.ndarray, far: np.ndarray, power: float) -> np.ndarray:
 def choose_spread(
     seen: np.ndarray, codes: np.ndarray, groups: np.ndarray, budget: float = FALSE_UNKNOWN
 ) -> tuple[float, float, float]:
-    """The quantile rate, the prior and the power of :class:`SpreadMargin`, chosen on the
-    held-out cases as :func:`choose_weight` chooses the first two (arguments as there), over
-    the powers of :data:`SPREAD_POWERS` too: of the triples whose thresholds the held-out
-    group's known cases exceed no more often than ``budget``, the one that calls most of a
+    """The quantile rate, the prior and the power of :class:`cbr.unknown_judges.SpreadMargin`,
+    chosen on the held-out cases as :func:`choose_weight` chooses the first two (arguments as
+    there), over the powers of :data:`SPREAD_POWERS` too: of the triples whose thresholds the
+    held-out group's known cases exceed no more often than ``budget``, the one that calls most of a
     gone activity's cases unknown (on a tie the larger rate, prior, then the smaller power);
     the least over-call when none keeps it. ``(budget, ACTIVITY_PRIOR, 0)`` when no activity
     has held-out cases in two groups."""

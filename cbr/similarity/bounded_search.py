@@ -20,7 +20,7 @@ def _grid_codes(
 ) -> tuple[np.ndarray, int, float]:
     """``v`` ``(m,)`` float64 on the grid ``base + steps * code`` (codes clipped to 0..255):
     (``weights * code`` ``(m,)`` int32, ``sum(weights code^2)``, ``|v - v_hat|`` rounded up
-    as :func:`_quantize` does it; inf when ``v`` has a NaN or inf)."""
+    as :func:`cbr.similarity.grid_codes._quantize` does it; inf when ``v`` has a NaN or inf)."""
     m = v.shape[0]
     codes = np.zeros(m, dtype=np.int32)
     code_sq = 0
@@ -205,15 +205,16 @@ def _pca_knn(
 
     ``pca`` = (codes ``(blocks, m, BLOCK)`` uint8, code_sq int32, errs float32, resid
     float32 ``(blocks BLOCK,)``, step, order ``(blocks BLOCK,)`` int64): the rows in the
-    order ``order`` (similar rows share a block, :func:`_cluster_order`), each row's
-    coordinates ``p_x = B'(x - mean)`` on the orthonormal basis ``B`` ``(D, m)`` on the grid
-    ``base + step * code``, ``e_x = |p_x - p_hat|`` rounded up and the residual norm ``r_x =
-    |x - mean - B p_x|`` (both inf for a row with NaN or inf, which has no bound and always
-    goes to the row kernel, as in the plain pass, and for the padding of the last block,
-    never visited); ``boxes``: each block's box (:func:`_block_order`); ``query_pca`` =
-    (``w c_q`` ``(m,)`` int32, ``sum(w c_q^2)``, ``e_q``, ``r_q``) the same for the query
-    (``w`` the dimensions' weights, :class:`PcaCodes`). ``rounding``: what a row kernel's
-    squared distance may lack of the true one; ``scale``: ``(top_norm + |q - mean|)^2``.
+    order ``order`` (similar rows share a block,
+    :func:`cbr.similarity.grid_codes._cluster_order`), each row's coordinates ``p_x = B'(x -
+    mean)`` on the orthonormal basis ``B`` ``(D, m)`` on the grid ``base + step * code``, ``e_x
+    = |p_x - p_hat|`` rounded up and the residual norm ``r_x = |x - mean - B p_x|`` (both inf
+    for a row with NaN or inf, which has no bound and always goes to the row kernel, as in the
+    plain pass, and for the padding of the last block, never visited); ``boxes``: each block's
+    box (:func:`_block_order`); ``query_pca`` = (``w c_q`` ``(m,)`` int32, ``sum(w c_q^2)``,
+    ``e_q``, ``r_q``) the same for the query (``w`` the dimensions' weights,
+    :class:`cbr.similarity.grid_codes.PcaCodes`). ``rounding``: what a row kernel's squared
+    distance may lack of the true one; ``scale``: ``(top_norm + |q - mean|)^2``.
 
     Why no neighbour is lost. Pythagoras on the basis and its complement, the reverse
     triangle inequality on the complement and the triangle inequality on the grid:
@@ -354,7 +355,7 @@ def codes_query(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """One query of :func:`_pca_knn`, its codes computed here: ``grid`` = (mean ``(D,)``,
     basis ``(D, m)`` (``(D, 0)``: the identity, the whole rows' codes), base, steps
-    ``(m,)``, weights ``(m,)``, top_norm) of :class:`PcaCodes`."""
+    ``(m,)``, weights ``(m,)``, top_norm) of :class:`cbr.similarity.grid_codes.PcaCodes`."""
     mean, basis, base, steps, weights, top_norm = grid
     if basis.shape[1] == 0:  # the whole rows: no projection, nothing outside the grid
         qp = q32.astype(np.float64)

@@ -3,43 +3,44 @@
 On binary QMP vectors the squared distance is the number of mismatched features, so the
 nearest cases are the ones with the most matched features.
 
-Every search returns exactly what :meth:`Euclidean.distances` and :func:`smallest_k` give (ties
--> lower case index): one compiled row kernel (:func:`_row_sq`, float32 rows, the squared
-differences summed in float64) computes every distance a search returns; the paths differ only
-in which rows they hand it, never in how a row's distance is computed. The bounds that choose
-the rows (BLAS products, codes) are float32's, with their rounding allowed for.
+Every search returns exactly what :meth:`Euclidean.distances` and
+:func:`cbr.similarity.base.smallest_k` give (ties -> lower case index): one compiled row kernel
+(:func:`cbr.similarity.row_kernel._row_sq`, float32 rows, the squared differences summed in
+float64) computes every distance a search returns; the paths differ only in which rows they hand
+it, never in how a row's distance is computed. The bounds that choose the rows (BLAS products,
+codes) are float32's, with their rounding allowed for.
 
 - **Plain pass**: small case bases stream every row through the kernel with the k best kept
   on the fly (:func:`knn_scan`); from ``2^20`` values, one BLAS matrix-vector product on one
   thread, and only the rows within its rounding error bound (Higham) of the k-th best go to
   the kernel (:func:`select_from_products`).
 - **Pruned search** for large case bases (``n >= prune_min_cases``, at least 40 dimensions;
-  :func:`_pca_knn`): with an orthonormal PCA basis ``B`` (``m`` columns, a sixth of the
-  dimensions, 8 to 128, fitted on a sample), every row's coordinates ``B'(x - mean)`` are
-  stored as uint8 codes with each row's exact grid error ``e_x`` and the norm ``r_x`` of its
-  part outside the basis, and ``|x - q|^2 >= max(|p_hat_q - p_hat_x| - e_q - e_x, 0)^2 +
-  (r_x - r_q)^2``. The codes are bits allocated by variance: one grid whose step per
+  :func:`cbr.similarity.bounded_search._pca_knn`): with an orthonormal PCA basis ``B`` (``m``
+  columns, a sixth of the dimensions, 8 to 128, fitted on a sample), every row's coordinates
+  ``B'(x - mean)`` are stored as uint8 codes with each row's exact grid error ``e_x`` and the
+  norm ``r_x`` of its part outside the basis, and ``|x - q|^2 >= max(|p_hat_q - p_hat_x| - e_q -
+  e_x, 0)^2 + (r_x - r_q)^2``. The codes are bits allocated by variance: one grid whose step per
   dimension shrinks by a power of two (up to 8) where the dimension's range is narrower,
   so ``|p_hat_q - p_hat_x|^2`` is a fixed step squared times an exact integer sum, and they
-  are stored dimension-major in blocks of ``BLOCK`` rows so the integer kernel vectorises
-  across rows: ``m`` bytes a case (a sixth of a float row's bytes at most). A case whose
-  bound is below the running k-th distance gets its exact distance at once (kept by
-  distance, then index, so the order cases are visited in never changes the answer).
+  are stored dimension-major in blocks of :data:`cbr.similarity.grid_codes.BLOCK` rows so the
+  integer kernel vectorises across rows: ``m`` bytes a case (a sixth of a float row's bytes at
+  most). A case whose bound is below the running k-th distance gets its exact distance at once
+  (kept by distance, then index, so the order cases are visited in never changes the answer).
   **Blocks of similar cases**: where the data has structure, the cases are stored in an
-  order in which each block of ``BLOCK`` holds similar ones (a tree of balanced 2-means
-  splits on the codes, :func:`_tree_order`), and each block keeps its box of codes and a
-  ball in the rows' space (centre and radius); per query one bound per block
-  (:func:`_block_order`: the box's grid distance and the ball's ``|q - c| - R``, both at
-  most every one of its cases'), the blocks are visited nearest first and the pass stops
-  at the first block whose bound exceeds the limit: the first blocks hold the neighbours,
-  the k-th distance falls at once and most blocks are never read. Whether the blocks come
-  out tight (median radius under ``_TIGHT`` of the cases' spread) is tried on a sample at
-  build time; where they do not (unstructured data), the cases keep their own order, the
-  exact distances stream from memory, and there are no boxes. The search measures its own
-  pruning power: when more than ``FALLBACK`` of the
-  cases pass the bound (unstructured data, where no low-rank bound prunes), the query is
-  the quantized pass below, and later queries skip the PCA bound (re-probing every
-  ``PROBE_EVERY``).
+  order in which each block of :data:`~cbr.similarity.grid_codes.BLOCK` holds similar ones (a
+  tree of balanced 2-means splits on the codes, :func:`cbr.similarity.grid_codes._tree_order`),
+  and each block keeps its box of codes and a ball in the rows' space (centre and radius); per
+  query one bound per block (:func:`cbr.similarity.bounded_search._block_order`: the box's grid
+  distance and the ball's ``|q - c| - R``, both at most every one of its cases'), the blocks are
+  visited nearest first and the pass stops at the first block whose bound exceeds the limit: the
+  first blocks hold the neighbours, the k-th distance falls at once and most blocks are never
+  read. Whether the blocks come out tight (median radius under
+  :data:`cbr.similarity.grid_codes._TIGHT` of the cases' spread) is tried on a sample at build
+  time; where they do not (unstructured data), the cases keep their own order, the exact
+  distances stream from memory, and there are no boxes. The search measures its own pruning
+  power: when more than ``FALLBACK`` of the cases pass the bound (unstructured data, where no
+  low-rank bound prunes), the query is the quantized pass below, and later queries skip the PCA
+  bound (re-probing every :data:`~cbr.similarity.pruning.PROBE_EVERY`).
 - **Quantized pass** (VA-file style). On unstructured rows (no blocks of similar rows) of
   at most ``MAX_DIMS`` dimensions, on a CPU with AVX2: 4-bit codes of the whole rows,
   summed per query from a byte table by AVX2's byte shuffle, with each row's exact grid
@@ -51,8 +52,9 @@ the rows (BLAS products, codes) are float32's, with their rounding allowed for.
   quarter of the float rows' bytes. On unstructured data the k-th neighbour lies far below
   the bulk and the grid error is small against that gap: all but ~0.01 % of the cases are
   pruned. When more than ``FALLBACK`` need their distance, the query is the plain pass (and
-  later queries skip the quantized pass too, re-probing every ``PROBE_EVERY``): an
-  unprunable case base costs one plain pass per query.
+  later queries skip the quantized pass too, re-probing every
+  :data:`~cbr.similarity.pruning.PROBE_EVERY`): an unprunable case base costs one plain pass per
+  query.
 - **Many queries** (:meth:`Euclidean.nearest_many`): one matrix product per block of queries
   (BLAS), then per query the cases whose product-based distance is within its rounding error
   bound of the k-th best are re-checked with the row kernel.
@@ -81,7 +83,7 @@ from .base import SimilarityMeasure, check_weighting, check_whole, register_meas
 from .bounded_search import codes_query, nibble_knn
 from .grid_codes import PcaCodes, pca_basis, pca_codes
 from .nibbles import HAS_SHUFFLE, MAX_DIMS, NibbleCodes, nibble_codes, nibble_tables
-from .pruning import FALLBACK, PROBE_EVERY, PruningRecord
+from .pruning import FALLBACK, PruningRecord
 from .row_kernel import all_distances, allowance_of, knn_scan, query32, select_from_products
 
 _U32 = 2.0**-24  # unit roundoff of float32
@@ -365,9 +367,9 @@ def _codes_search(
     k: int,
     max_count: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """:func:`_pca_knn` for ``q32`` ``(D,)`` with ``codes`` (the PCA codes or the whole
-    rows'), handing over once more than ``max_count`` (default: ``FALLBACK`` of the rows)
-    need their distance."""
+    """:func:`cbr.similarity.bounded_search._pca_knn` for ``q32`` ``(D,)`` with ``codes`` (the
+    PCA codes or the whole rows'), handing over once more than ``max_count`` (default:
+    ``FALLBACK`` of the rows) need their distance."""
     if max_count is None:
         max_count = max(k, int(FALLBACK * len(index.rows)))
     grid, kernel, boxes = codes.kernel_args
@@ -462,4 +464,4 @@ def _pruned_search(
     return idx, dist
 
 
-__all__ = ["FALLBACK", "MAX_DIMS", "PROBE_EVERY", "SMALL_PRODUCT", "Euclidean"]
+__all__ = ["FALLBACK", "MAX_DIMS", "SMALL_PRODUCT", "Euclidean"]

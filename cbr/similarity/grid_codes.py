@@ -42,7 +42,8 @@ class PcaCodes(PruningRecord):
 
     @cached_property
     def kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...], tuple[Any, ...]]:
-        """The grid, the codes and the boxes as :func:`codes_query` takes them."""
+        """The grid, the codes and the boxes as
+        :func:`cbr.similarity.bounded_search.codes_query` takes them."""
         basis = np.zeros((len(self.mean), 0)) if self.basis is None else self.basis
         return (
             (self.mean, basis, self.base, self.steps, self.weights, self.top_norm),
