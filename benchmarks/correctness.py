@@ -72,7 +72,8 @@ def scores(truth: np.ndarray, answers: np.ndarray) -> dict[str, float]:
 def correctness_rows() -> list[dict[str, Any]]:
     """One row per configuration, training mix, movement and vote."""
     from cbr.estimator import CaseBaseClassifier
-    from features.datasets import clip_target, load_dataset
+    from features.datasets import load_dataset
+    from features.targets import clip_target
 
     clips = load_dataset(SHARED / "ui-prmd", sensor="kinect", progress_desc="ui-prmd kinect")
     rows = []

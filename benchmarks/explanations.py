@@ -103,7 +103,7 @@ def fit_classifier(
     same model as ``fit``, which is these two steps."""
     from cbr.described import describe_clips
     from cbr.estimator import CaseBaseClassifier
-    from features.datasets import clip_target
+    from features.targets import clip_target
 
     clf = CaseBaseClassifier(**params)
     y = [clip_target(c, target) for c in train]
@@ -126,7 +126,7 @@ def explain_rows(
     whether the answer was right and its confidence (``explain`` False: the last two only)."""
     from cbr.consistency import contradictions
     from cbr.profiles import view_of
-    from features.datasets import clip_target
+    from features.targets import clip_target
 
     rows = []
     for clip, one in zip(test, solved, strict=True):

@@ -67,7 +67,7 @@ def counts(seq: Any) -> list[int]:
 def recordings(per_group: int, videos: bool) -> Iterator[tuple[str, str, Any]]:
     from benchmarks.repetitions import hdm05_groups, joined_sequences, uiprmd_groups
     from benchmarks.segment import DATA, FIXTURE
-    from features.datasets import load_clip
+    from features.clips import load_clip
     from features.readers.asfamc import read_asf_amc
 
     groups = uiprmd_groups("Kinect") + uiprmd_groups("Vicon") + hdm05_groups()

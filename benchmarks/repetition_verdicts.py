@@ -72,8 +72,8 @@ def session(
 ) -> tuple[Any, list[tuple[int, int]], list[str]]:
     """The held-out person's ``clips`` (one movement) in a random order, joined: the
     recording, each repetition's frames ``[start, end)`` and its verdict."""
-    from features.datasets import clip_target
     from features.joining import join_repetitions
+    from features.targets import clip_target
 
     order = [clips[int(i)] for i in rng.permutation(len(clips))]
     joined = join_repetitions([c.seq for c in order])
@@ -130,7 +130,7 @@ def fitted(train: list[Any]) -> tuple[Any, Any, float]:
     ``train`` clips' verdicts, and the case base's fit time (s)."""
     from cbr.estimator import CaseBaseClassifier
     from cbr.evaluation.peers import DTWKNNPeer
-    from features.datasets import clip_target
+    from features.targets import clip_target
 
     y = [str(clip_target(c, "correct")) for c in train]
     start = time.perf_counter()

@@ -60,7 +60,7 @@ import numpy as np  # noqa: E402
 
 from benchmarks import write_json  # noqa: E402
 from benchmarks._common import one_thread_machine, versions  # noqa: E402
-from cbr.unknown import JUDGES as UNKNOWN_JUDGES  # noqa: E402
+from cbr.judges import JUDGES as UNKNOWN_JUDGES  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSECBR_SHARED_DATA", ROOT.parent / "shared" / "data"))
@@ -105,7 +105,7 @@ def training_clips(
     recs: list[Recording], leave_out: str | None = None, cases: str = CASES[0]
 ) -> list[Any]:
     """The labelled stretches of ``recs`` cut into windows or repetitions (``train --split``)."""
-    from features.datasets import Clip
+    from features.clips import Clip
     from features.derived import stretch
     from features.label_tracks import labelled_stretches
     from features.repetitions import split_repetitions, split_windows
@@ -163,7 +163,9 @@ held-out known and novel cases err equally (the default before the false-unknown
 
 
 def judge_named(clf: Any, name: str) -> Any:
-    from cbr.unknown import Margin, calibration_margins, equal_error_threshold, judge_of
+    from cbr.unknown import judge_of
+    from cbr.unknown_judges import Margin
+    from cbr.unknown_thresholds import calibration_margins, equal_error_threshold
 
     if name == "margin-equal-error":
         known, novel, basis = calibration_margins(clf.case_base_)
@@ -288,7 +290,7 @@ def bench_repetitions(
     (name: count of a PoseSequence) against the hand counts of FIXTURE: every clip's counts,
     and MAE, off-by-one accuracy and exact share for mocap, videos and all (of ``others``
     under their names)."""
-    from features.datasets import load_clip
+    from features.clips import load_clip
     from features.readers.asfamc import read_asf_amc
     from features.repetitions import count_repetitions
 

@@ -239,7 +239,7 @@ def joined_training(train: list[Group], read: Reader) -> list[tuple[Any, Group]]
 def training_clips(joined: list[tuple[Any, Group]], leave_out: str | None = None) -> list[Any]:
     """The joined training clips but ``leave_out``'s, cut into windows as ``train --split
     windows`` cuts."""
-    from features.datasets import Clip
+    from features.clips import Clip
     from features.repetitions import split_windows
 
     clips = [Clip(seq, g.movement, g.person, {}) for seq, g in joined if g.movement != leave_out]

@@ -66,7 +66,8 @@ def build(db: Path) -> dict[str, Any]:
 
 def start_up(db: Path, repeats: int) -> dict[str, Any]:
     """Loading the stored model and readying every judge, stored and fresh."""
-    from cbr.unknown import JUDGES, judge_of
+    from cbr.judges import JUDGES
+    from cbr.unknown import judge_of
     from posecbr.commands.segment import load_stored
 
     clf, load_s = _median(lambda: load_stored(str(db), None), repeats)

@@ -99,7 +99,7 @@ def near_bound(judge: Any, known: np.ndarray, novel: np.ndarray) -> float:
     :data:`NEAR_COST` of the held-out novel cases ``novel`` ``(m, n_classes)`` are both
     called unknown by ``judge`` and no farther than it; 0 (no bound) when none is, or either
     is empty."""
-    from cbr.unknown import false_unknown_threshold
+    from cbr.unknown_thresholds import false_unknown_threshold
 
     if not len(known) or not len(novel):
         return 0.0
@@ -134,7 +134,8 @@ class Bounded:
 def bounds(judge: Any, held: Any) -> tuple[float, float]:
     """``(near, far)`` of :class:`Bounded` from the case base's held-out scan ``held``
     (:func:`cbr.unknown.held_out_activities`) and its calibrated ``judge``."""
-    from cbr.unknown import false_unknown_threshold, known_and_novel
+    from cbr.unknown_held_out import known_and_novel
+    from cbr.unknown_thresholds import false_unknown_threshold
 
     known, novel = known_and_novel(held[0], held[1])
     far = false_unknown_threshold(np.min(known, axis=1), FAR_RATE) if len(known) else math.inf
@@ -155,7 +156,7 @@ def person_scale(held_d1: np.ndarray, d1: np.ndarray) -> float:
     """How much nearer the held-out known cases' nearest tenth (their d1 ``held_d1``) lies
     than a recording's windows' (``d1``): the ratio of the two 10 % quantiles, shrunk
     towards 1 by 8 windows (:data:`cbr.unknown.PERSON_PRIOR`); 1 without a finite one."""
-    from cbr.unknown import PERSON_PRIOR, PERSON_QUANTILE
+    from cbr.unknown_person import PERSON_PRIOR, PERSON_QUANTILE
 
     d = np.asarray(d1, dtype=np.float64)
     d = d[np.isfinite(d)]
@@ -186,7 +187,7 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
     held-out scan and, per test recording, every non-repetition window's distances to every
     activity, stillness and movement, and every counted window's d1 (the person offset's)."""
     from benchmarks.segment import judge_named
-    from cbr.unknown import held_out_activities
+    from cbr.unknown_held_out import held_out_activities
 
     clf = fit(training_clips(joined, leave_out=movement))
     recs = recordings_measured(clf, fold)
@@ -229,7 +230,9 @@ def judge_scores(judge: Any, rows: np.ndarray) -> np.ndarray:
 def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
     """Per rule of :data:`RULES`: the tally ``[known kept, known, novel unknown, novel]`` of
     one left-out movement's case base (``measured``: :func:`measure`)."""
-    from cbr.unknown import for_person, known_and_novel, person_offset
+    from cbr.unknown import for_person
+    from cbr.unknown_held_out import known_and_novel
+    from cbr.unknown_person import person_offset
 
     judge, held = measured["judge"], measured["held"]
     near, far = bounds(judge, held)

@@ -340,7 +340,7 @@ def distance_thresholds(cb: Any) -> dict[str, float]:
     """The ``nearest`` distance's threshold from the case base alone: the 95 % quantile of
     the nearest-case distance of training cases held out as the margin judges hold them out
     (:func:`cbr.unknown.held_out_activities`, known rows)."""
-    from cbr.unknown import held_out_activities, known_rows
+    from cbr.unknown_held_out import held_out_activities, known_rows
 
     seen, codes, _, _ = held_out_activities(cb)
     known = seen[known_rows(seen, codes)]
@@ -618,7 +618,9 @@ def held_scan(cb: Any) -> dict[str, Any]:
     activity's threshold, the judge calibrated on that scan as ``segment`` calibrates it) and
     the nearest distance of the held-out known cases (their activity within reach) and novel
     ones (their activity left out; see :func:`cbr.unknown.known_and_novel`)."""
-    from cbr.unknown import STORED, for_person, held_out_activities, known_and_novel
+    from cbr.unknown import for_person
+    from cbr.unknown_held_out import held_out_activities, known_and_novel
+    from cbr.unknown_stored import STORED
 
     held = held_out_activities(cb)
     judge = STORED[JUDGE].of(cb, held=held)

@@ -79,7 +79,7 @@ def people_scan(cb: Any, sample: int | None = None, seed: int = 0) -> tuple[Any,
     the person did not do the activity. People are the case base's subjects, in sorted
     order; the second array is empty ``(n, 0, n_classes)`` when the scan does not hold out
     people (basis not "subject"). Its minimum over people is the scan's own distances."""
-    from cbr.unknown import (
+    from cbr.unknown_held_out import (
         MARGIN_SAMPLE,
         activity_codes,
         held_out_activities,
@@ -155,7 +155,7 @@ def median_ratio(people: np.ndarray, codes: np.ndarray) -> float:
     ``people`` over people) median nearest distance over their median nearest distance with
     each other person left out in turn too (pooled; a person whose leaving leaves a case no
     activity is not counted); 1 when either is not positive or there is no such case."""
-    from cbr.unknown import known_rows
+    from cbr.unknown_held_out import known_rows
 
     seen = people.min(axis=1) if people.shape[1] else np.zeros((len(people), 0))
     if not people.shape[1] or not len(people):
@@ -219,7 +219,8 @@ def choose_correction(labels: Any, held: Any, people: np.ndarray) -> tuple[str, 
     pooled. The one that calls most novel cases unknown while keeping known ones within
     :data:`CHOICE_SLACK` of ``none``'s (a tie: the first, ``none`` first). ``none`` without
     three people to stand in for (or when a stand-in's case base cannot be calibrated)."""
-    from cbr.unknown import SpreadMargin, known_and_novel
+    from cbr.unknown_held_out import known_and_novel
+    from cbr.unknown_judges import SpreadMargin
     from features.errors import DataError
 
     seen, codes, basis, groups = held
@@ -252,7 +253,7 @@ def choose_correction(labels: Any, held: Any, people: np.ndarray) -> tuple[str, 
 def judges(labels: Any, held: Any, people: np.ndarray) -> dict[str, Any]:
     """Every rule of :data:`RULES` but the first two's judge, calibrated on its corrected
     scan; ``labels`` the case base's (the margin judges need three activities)."""
-    from cbr.unknown import SpreadFar, SpreadMargin
+    from cbr.unknown_judges import SpreadFar, SpreadMargin
 
     cb = SimpleNamespace(labels=labels)
     out: dict[str, Any] = {}
@@ -287,7 +288,8 @@ def measure(fold: Fold, joined: list[tuple[Any, Group]], movement: str) -> dict[
 def decide(movement: str, measured: dict[str, Any]) -> dict[str, np.ndarray]:
     """Per rule of :data:`RULES`: the tally ``[known kept, known, novel unknown, novel]`` of
     one left-out movement's case base (``measured``: :func:`measure`)."""
-    from cbr.unknown import SpreadFar, for_person
+    from cbr.unknown import for_person
+    from cbr.unknown_judges import SpreadFar
 
     judge, held = measured["judge"], measured["held"]
     rules: dict[str, Any] = {"spread-margin": judge,
@@ -310,7 +312,8 @@ def quantiles(measured: dict[str, Any], movement: str) -> dict[str, float]:
     """The diagnostic: the 95 % quantile of the nearest distance of the held-out known cases
     with a second person left out too (pooled), of the scan's (P-1), of each correction's,
     and of the test people's known windows (P)."""
-    from cbr.unknown import false_unknown_threshold, known_rows
+    from cbr.unknown_held_out import known_rows
+    from cbr.unknown_thresholds import false_unknown_threshold
 
     held, people = measured["held"], measured["people"]
     seen, codes = held[0], held[1]

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from features.body import swap_side
-from features.datasets import truth_value
+from features.targets import truth_value
 
 from .calibration import UNCALIBRATED
 from .casebase import CaseBase

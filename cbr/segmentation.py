@@ -85,18 +85,9 @@ from .estimator_protocol import check_case_base_classifier
 from .explain import Explanation
 from .problem import FeatureConfig, warm
 from .reuse import class_balance, vote
-from .unknown import (
-    Familiarity,
-    HeldOut,
-    Judge,
-    Margin,
-    activity_codes,
-    default_judge,
-    for_person,
-    per_activity,
-    tell_unknown,
-    unknown_evidence,
-)
+from .unknown import default_judge, for_person, tell_unknown, unknown_evidence
+from .unknown_held_out import activity_codes, per_activity
+from .unknown_judges import Familiarity, HeldOut, Judge, Margin
 
 BLOCK_S = 0.1
 """Labels are given per block of this many seconds (the resolution of the label files)."""

@@ -46,7 +46,8 @@ from .estimator import CaseBaseClassifier
 from .novelty import NoveltyCalibration, calibrate
 from .problem import FeatureConfig
 from .similarity import SimilarityMeasure, get_measure
-from .unknown import AT_FIT, Calibrated, calibrate_judges, judges_apart, judges_from_dict
+from .unknown_records import Calibrated
+from .unknown_stored import AT_FIT, calibrate_judges, judges_apart, judges_from_dict
 from .weights import MIRROR_FLAG, FeatureWeights
 from .words import CASE_KINDS as CASE_KINDS
 

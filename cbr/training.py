@@ -36,17 +36,19 @@ from casebase_store import (
     write_store,
 )
 from features.cluster import connect, gather, map_outcomes
-from features.datasets import DatasetEntry, clip_target
+from features.datasets import DatasetEntry
 from features.errors import ConfigError, DataError, InputError, PosecbrError
 from features.interrupts import stored_before
 from features.poses import PoseSequence
 from features.progress import progress
+from features.targets import clip_target
 from features.text import counted, did_you_mean, spelt_as
 
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
 from .estimator import CaseBaseClassifier, as_sequences, check_labels
 from .estimator_protocol import check_fitted, unfitted_copy
+from .judges import JUDGES
 from .maintenance import MaintenanceReport, record_trim
 from .problem import FeatureConfig
 from .stored import (
@@ -58,7 +60,6 @@ from .stored import (
     write_matrices,
 )
 from .stored import stored_case_base as to_store
-from .unknown import JUDGES
 from .words import CASE_KINDS
 
 
@@ -402,7 +403,7 @@ def cut(
     ``cases=split`` (for windows with ``CaseBaseClassifier(feature_weights="none")``, as
     ``train --split windows``). Bad ``clips``, ``labels`` or ``split``:
     :class:`features.errors.InputError` naming the argument."""
-    from features.datasets import Clip
+    from features.clips import Clip
     from features.repetitions import cut_clips
 
     seqs = as_sequences(clips, "clips")
@@ -498,9 +499,9 @@ def cut_recording(
     Bad arguments are an :class:`features.errors.InputError` naming the argument; a label
     file that cannot be read or whose count does not fit the recording, a DataError naming
     it, as the command says it."""
-    from features.datasets import split_by_labels, stretch_clips
     from features.label_tracks import read_label_track
     from features.repetitions import MIN_PERIOD_S, cut_clips, long_enough
+    from features.stretches import split_by_labels, stretch_clips
 
     if not isinstance(recording, PoseSequence):
         raise InputError(f"must be a PoseSequence, got {type(recording).__name__}", "recording")

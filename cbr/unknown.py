@@ -2,12 +2,14 @@
 fitted classifier segments with (the one stored with it or calibrated now, in its classes'
 order, taken for one recording's person) and its word on a window and on a stretch.
 
-The judges and their calibration are modules of their own, every name of them imported from
-here too: the held-out scan (:mod:`cbr.unknown_held_out`), the thresholds read from it
-(:mod:`cbr.unknown_thresholds`) and their weights chosen on it (:mod:`cbr.unknown_weights`),
-a one-person case base's person offset (:mod:`cbr.unknown_person`), the judges
-(:mod:`cbr.unknown_judges`, whose docstring tells them apart), a judge as a stored record
-(:mod:`cbr.unknown_records`) and the judges stored with a model (:mod:`cbr.unknown_stored`).
+The judges and their calibration are modules of their own: the held-out scan
+(:mod:`cbr.unknown_held_out`), the thresholds read from it (:mod:`cbr.unknown_thresholds`) and
+their weights chosen on it (:mod:`cbr.unknown_weights`), a one-person case base's person offset
+(:mod:`cbr.unknown_person`), the judges (:mod:`cbr.unknown_judges`, whose docstring tells them
+apart), a judge as a stored record (:mod:`cbr.unknown_records`) and the judges stored with a
+model (:mod:`cbr.unknown_stored`). The names of them that the README, the tests and
+:mod:`cbr.live` take from here are imported here too; other code imports each from its own
+module.
 """
 
 from __future__ import annotations
@@ -25,21 +27,16 @@ from features.errors import DataError, ParameterError
 from .estimator_protocol import check_case_base_classifier
 from .judges import JUDGES
 from .unknown_held_out import (
-    MARGIN_SAMPLE,
-    Held,
     activity_codes,
     calibration_order,
     held_out_activities,
     held_out_basis,
-    held_out_rows,
     known_and_novel,
     known_rows,
-    per_activity,
 )
 from .unknown_judges import (
     HELD_OUT_ADVICE,
     ActivityMargin,
-    Familiarity,
     HeldOut,
     Judge,
     Margin,
@@ -48,8 +45,8 @@ from .unknown_judges import (
     SpreadMargin,
     two_nearest,
 )
-from .unknown_person import PERSON_PRIOR, PERSON_QUANTILE, person_offset, person_reach
-from .unknown_records import ADDED, Calibrated, added_fields
+from .unknown_person import PERSON_PRIOR, person_offset
+from .unknown_records import Calibrated
 from .unknown_stored import (
     AT_FIT,
     STORED,
@@ -61,9 +58,7 @@ from .unknown_stored import (
 from .unknown_thresholds import (
     ACTIVITY_PRIOR,
     FALSE_UNKNOWN,
-    JOINT_GRID,
     NOVEL_CATCH,
-    Weight,
     activity_thresholds,
     calibration_margins,
     equal_error_threshold,
@@ -74,8 +69,6 @@ from .unknown_thresholds import (
     threshold_grid,
 )
 from .unknown_weights import (
-    PRIOR_GRID,
-    RATE_SHARES,
     SPREAD_POWERS,
     activity_spreads,
     choose_spread,
@@ -252,32 +245,23 @@ __all__ = [
     "STORED",
     "Calibrated",
     "calibrate_judges",
-    "ADDED",
-    "added_fields",
     "judges_apart",
     "judges_from_dict",
     "judges_to_dict",
-    "MARGIN_SAMPLE",
-    "Familiarity",
     "HeldOut",
     "Judge",
     "Margin",
     "MarginDistance",
     "Offset",
     "PERSON_PRIOR",
-    "PERSON_QUANTILE",
     "for_person",
     "person_offset",
-    "person_reach",
     "activity_codes",
     "activity_thresholds",
     "choose_weight",
     "inner_scores",
-    "PRIOR_GRID",
-    "RATE_SHARES",
     "known_rows",
     "held_out_activities",
-    "held_out_rows",
     "joint_thresholds",
     "known_and_novel",
     "calibration_margins",
@@ -288,16 +272,12 @@ __all__ = [
     "held_out_basis",
     "judge_of",
     "margin_of",
-    "per_activity",
     "tell_unknown",
     "unknown_evidence",
     "two_nearest",
-    "Held",
-    "JOINT_GRID",
     "NOVEL_CATCH",
     "one_person_floor",
     "threshold_grid",
-    "Weight",
     "inner_grid",
     "in_class_order",
 ]

@@ -12,9 +12,9 @@ kind            what ``path`` is
                 columns become extras), or a folder with a ``labels.csv``. Relative paths
                 resolve against the CSV's folder; ``start``/``end`` are frame indices, end
                 exclusive. A long recording labelled over time has a ``label_file`` instead of
-                a ``label`` (:func:`read_label_track`: one label per frame, or per
-                ``label_block_s`` seconds; codes named by a ``label_names`` file) and becomes
-                one clip per labelled stretch.
+                a ``label`` (:func:`features.label_tracks.read_label_track`: one label per
+                frame, or per ``label_block_s`` seconds; codes named by a ``label_names``
+                file) and becomes one clip per labelled stretch.
 ``asf_amc``     a folder with ``.amc`` files (any depth) and the actor's ``.asf`` beside each:
                 HDM05 (label = action in the file name, subject = actor) or CMU (label =
                 the AMC's folder name).
@@ -45,21 +45,14 @@ from features.text import spelt_among
 from .clip_folders import check_no_extracted_twin, check_not_nested, clip_files, extracted_twin
 from .clips import (
     POSE_SUFFIXES,
-    VIDEO_SUFFIXES,
     Clip,
-    NoSkeletonError,
     clip_suffix,
     find_asf,
     load_clip,
-    source_video,
 )
 from .label_tracks import (
     LabelTrack,
     code_order,
-    frame_labels,
-    labelled_stretches,
-    read_label_names,
-    read_label_track,
     track_labels,
 )
 from .labels_csv import check_rows_apart, read_labels_csv
@@ -70,12 +63,10 @@ from .stretches import (
     check_fits_before_read,
     check_track,
     iter_recording,
-    recording_clips,
     split_by_labels,
     split_by_track,
-    stretch_clips,
 )
-from .targets import clip_column, clip_target, extra, truth_value
+from .targets import clip_target, extra
 
 
 @dataclass(frozen=True)
@@ -638,16 +629,13 @@ __all__ = [
     "Clip",
     "DatasetEntry",
     "LabelTrack",
-    "NoSkeletonError",
     "POSE_SUFFIXES",
     "UIPRMD_MOVEMENTS",
-    "VIDEO_SUFFIXES",
     "check_fits_before_read",
     "check_no_extracted_twin",
     "check_no_overlaps",
     "check_not_nested",
     "check_track",
-    "clip_column",
     "clip_files",
     "clip_target",
     "dataset_columns",
@@ -660,22 +648,14 @@ __all__ = [
     "detect_kind",
     "extra",
     "find_asf",
-    "frame_labels",
     "is_uiprmd_folder",
     "iter_dataset",
     "iter_recording",
     "labelled_over_time",
-    "labelled_stretches",
     "load_clip",
     "load_dataset",
-    "read_label_names",
-    "read_label_track",
     "read_labels_csv",
-    "recording_clips",
-    "source_video",
     "split_by_labels",
     "split_by_track",
-    "stretch_clips",
-    "truth_value",
     "unlisted_pose_files",
 ]

@@ -102,7 +102,7 @@ def load_recording(path: Path, asf: Path | None = None, fps: float | None = None
 
 def load_clip_as_asked(path: Path, asf: Path | None, fps: float | None) -> Any:
     """The clip at ``path`` as ``describe`` and ``dad`` read it: as every clip is read
-    (:func:`features.datasets.load_clip`), or, given ``--asf`` or ``--fps``, as
+    (:func:`features.clips.load_clip`), or, given ``--asf`` or ``--fps``, as
     :func:`load_recording` reads a recording with them."""
     if asf is None and fps is None:
         return load_clip_naming_asf(path)
@@ -110,10 +110,10 @@ def load_clip_as_asked(path: Path, asf: Path | None, fps: float | None) -> Any:
 
 
 def load_clip_naming_asf(path: Path) -> Any:
-    """:func:`features.datasets.load_clip` for a command that takes ``--asf``: an AMC file
+    """:func:`features.clips.load_clip` for a command that takes ``--asf``: an AMC file
     with no skeleton to be found beside it is refused with the way to give it one here
     (``--asf FILE.asf``), not with ``convert``'s."""
-    from features.datasets import NoSkeletonError, load_clip
+    from features.clips import NoSkeletonError, load_clip
 
     try:
         return load_clip(path)
@@ -160,7 +160,7 @@ def assumed_rates_note(found: Iterable[Assumed], how: str = GIVE_FPS) -> str | N
     names it, several are counted with one named (a folder of 200 AMC files is one line).
     A pose file's assumption stays in its metadata, said when ``convert`` wrote it, and
     not again at every read. None when no rate was assumed."""
-    from features.datasets import POSE_SUFFIXES
+    from features.clips import POSE_SUFFIXES
     from features.text import shown
 
     named: dict[str, tuple[float, str]] = {}

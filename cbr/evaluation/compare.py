@@ -32,7 +32,7 @@ from datetime import UTC, datetime
 
 import numpy as np
 
-from features.datasets import Clip
+from features.clips import Clip
 from features.errors import ConfigError
 
 from ..similarity import get_measure

@@ -10,9 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from features.datasets import Clip, clip_column, clip_target
+from features.clips import Clip
 from features.errors import DataError
 from features.poses import PoseSequence
+from features.targets import clip_column, clip_target
 from features.text import counted
 
 from .settings import CompareSettings

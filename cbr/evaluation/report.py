@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from features.datasets import truth_value
 from features.errors import DataError
 from features.fileio import binary_kind, check_output, file_head, path_exists, write_text_atomic
 from features.poses import check_not_poses
+from features.targets import truth_value
 from features.text import size_words
 
 from ..explain import class_noun

@@ -133,15 +133,10 @@ def load_inputs(
     AMC file's skeleton) and at ``fps`` when given, as ``segment`` reads a recording."""
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
-    from features.datasets import (
-        Clip,
-        check_no_extracted_twin,
-        clip_files,
-        clip_target,
-        detect_kind,
-        iter_dataset,
-        load_clip,
-    )
+    from features.clip_folders import check_no_extracted_twin, clip_files
+    from features.clips import Clip, load_clip
+    from features.datasets import detect_kind, iter_dataset
+    from features.targets import clip_target
 
     def of_file(seq: PoseSequence) -> Clip:
         subject = seq.metadata.get("subject")

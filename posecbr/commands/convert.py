@@ -42,7 +42,7 @@ from posecbr.arguments import check_each_found, held_words, path_arg
 from posecbr.recordings import add_sensor_option, check_fps, sensor_for
 
 if TYPE_CHECKING:
-    from features.datasets import Clip
+    from features.clips import Clip
     from features.poses import PoseSequence
 
 
@@ -190,7 +190,7 @@ def _clip_name(clip: Clip, fallback: str) -> str:
 
 
 def _single_clips(args: argparse.Namespace) -> list[tuple[Clip, str]]:
-    from features.datasets import Clip, find_asf
+    from features.clips import Clip, find_asf
     from features.readers.asfamc import read_asf_amc
     from features.readers.bvh import read_bvh
 
@@ -221,7 +221,8 @@ def _bvh_unit(text: str) -> str | float:
 
 def _inputs(args: argparse.Namespace) -> list[Path]:
     """Every file the conversion reads (from names and listings; nothing is read yet)."""
-    from features.datasets import dataset_files, find_asf
+    from features.clips import find_asf
+    from features.datasets import dataset_files
 
     src: Path = args.source
     if src.is_file() and src.suffix.lower() == ".bvh":
@@ -335,7 +336,8 @@ def _check_folder_options(args: argparse.Namespace) -> None:
 def _check_columns(src: Path) -> None:
     """Refuse a labels CSV with a column named as something convert writes in each pose file
     itself (:data:`_WRITTEN`, in any case): the column's values would be lost or misread."""
-    from features.datasets import detect_kind, read_labels_csv
+    from features.datasets import detect_kind
+    from features.labels_csv import read_labels_csv
 
     if (src.is_file() and src.suffix.lower() in (".bvh", ".amc")) or detect_kind(src) != "csv":
         return
@@ -461,8 +463,8 @@ def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> Non
         dataset_labels,
         dataset_movements,
         dataset_subjects,
-        extra,
     )
+    from features.targets import extra
 
     limited = args.limit is not None and len(written) >= args.limit
     asked = []
@@ -493,7 +495,7 @@ def _check_asked(args: argparse.Namespace, written: list[dict[str, Any]]) -> Non
 
 def _episode(row: dict[str, Any]) -> Any:
     """A converted clip's episode (UI-PRMD) or take (HDM05), as ``--episodes`` filters them."""
-    from features.datasets import extra
+    from features.targets import extra
 
     episode = extra(row, "episode")
     return extra(row, "take") if episode is None else episode
@@ -636,7 +638,8 @@ def _listed_before(labels: Path) -> tuple[list[dict[str, Any]], list[str]]:
         raise DataError(f"cannot read the labels file already there ({exc})", labels) from None
     if "path" not in (c.strip().lower() for c in columns):
         raise DataError("the labels file already there has no 'path' column", labels)
-    from features.datasets import check_no_overlaps, read_labels_csv
+    from features.datasets import check_no_overlaps
+    from features.labels_csv import read_labels_csv
 
     try:  # every row a clip with its label, as train and classify will read it
         read_labels_csv(labels)
@@ -675,7 +678,7 @@ def _check_not_hidden(out: Path) -> None:
 def _named(row: dict[Any, Any]) -> dict[str, Any]:
     """A labels.csv row without the cells of columns the header leaves unnamed: the empty
     columns a spreadsheet saves after the last one used (``path,label,,``), which train
-    leaves out (:func:`features.datasets.read_labels_csv` refuses one holding a value) and
+    leaves out (:func:`features.labels_csv.read_labels_csv` refuses one holding a value) and
     which were written back as a column named ""."""
     return {k: v for k, v in row.items() if k is not None and k.strip()}
 

@@ -185,7 +185,7 @@ def _steps(data: Path, out: Path, quick: bool) -> list[Step]:
 def _check_data(data: Path) -> None:
     """Refuse, before anything is written, a ``--data`` folder the steps cannot run on: the
     demo describes ``m01_s01_e01.npz``, trains on subjects s01 and s02 and classifies s03."""
-    from features.datasets import read_labels_csv
+    from features.labels_csv import read_labels_csv
 
     if data.is_file():  # the labels CSV itself, say: "expected labels.csv" puzzled
         folder = f": give its folder, {data.parent}" if data.name == "labels.csv" else ""

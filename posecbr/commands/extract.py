@@ -187,7 +187,7 @@ def _live_stills(paths: list[Path]) -> list[Path]:
 
 
 def _csv_jobs(csv_path: Path, out: Path) -> list[Job]:
-    from features.datasets import read_labels_csv
+    from features.labels_csv import read_labels_csv
 
     jobs = []
     for rec in read_labels_csv(csv_path):
@@ -234,7 +234,7 @@ def _folder_jobs(source: Path, out: Path) -> list[Job]:
         subdirs = sorted(d for d in source.iterdir() if d.is_dir() and not d.name.startswith("."))
     except OSError as exc:
         raise DataError(f"cannot list folder ({exc.strerror or exc})", source) from None
-    from features.datasets import check_not_nested
+    from features.clip_folders import check_not_nested
 
     if any(_videos_in(d) for d in subdirs):  # read as class folders, as train reads them
         for d in subdirs:
@@ -334,7 +334,8 @@ def _listed_jobs(source: Path, out: Path) -> list[Job]:
     (:func:`features.datasets.check_no_overlaps`, as ``train``, ``compare`` and ``convert``
     refuse them): the pose files written would be those frames under two labels, which a
     ``train`` of the folder cannot tell and a ``train`` of the CSV refuses."""
-    from features.datasets import check_no_overlaps, check_track
+    from features.datasets import check_no_overlaps
+    from features.stretches import check_track
 
     csv_path = source if source.is_file() else source / "labels.csv"
     if not csv_path.is_file():
@@ -1032,7 +1033,7 @@ def _made_of(pose: Path, video: Path, digests: dict[Path, str | None]) -> bool:
     the folder extract ran in: from another folder it may name another video). A video that
     cannot be read passes (its clip fails, writing nothing); its digest is kept in
     ``digests`` (a labels CSV lists one video in several rows)."""
-    from features.datasets import source_video
+    from features.clips import source_video
 
     if pose.is_symlink() or not pose.is_file():
         return False

@@ -265,9 +265,9 @@ def _read_truths(args: argparse.Namespace) -> list[list[str]] | None:
 def _check_truths_fit(args: argparse.Namespace, labels: list[list[str]] | None) -> None:
     """Refuse a ``--truth`` file whose count does not fit its recording where the frames are
     known before the recording is read (a pose file's header, a constant-rate video's
-    container: :func:`features.datasets.check_fits_before_read`), before a video's poses are
+    container: :func:`features.stretches.check_fits_before_read`), before a video's poses are
     estimated; the others are checked once read (:func:`_fitted_truths`)."""
-    from features.datasets import check_fits_before_read
+    from features.stretches import check_fits_before_read
 
     for track, path, recording in zip(
         labels or [], args.truth or [], args.recordings, strict=False
@@ -330,7 +330,7 @@ def _overlay_targets(args: argparse.Namespace) -> list[Path | None]:
     ``extract --overlay DIR`` replaces only its own. Before, a folder was refused ("name the
     .mp4 file to write in it") and so were several recordings ("--overlay takes one
     recording")."""
-    from features.datasets import VIDEO_SUFFIXES
+    from features.clips import VIDEO_SUFFIXES
 
     overlay = args.overlay
     if overlay is None:

@@ -370,8 +370,8 @@ def _recording_clips(args: argparse.Namespace, activities: list[str] | None) -> 
     subject, an HDM05 name's actor), as a labels CSV's recording and
     :func:`cbr.training.cut_recording` keep it."""
     from cbr.casebase import subject_of
-    from features.datasets import recording_clips
     from features.label_tracks import LabelTrack
+    from features.stretches import recording_clips
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     seq = load_recording(args.data, args.asf, args.fps)
@@ -488,7 +488,7 @@ def _clips(args: argparse.Namespace) -> list[Any]:
     if stretches:  # a labels CSV's recordings: its flickers left out as --frame-labels' are
         clips = _long_enough(args, clips)
     if clips and not args.append:  # before the cutting is said: the refusal is one line
-        from features.datasets import clip_target
+        from features.targets import clip_target
 
         values = [clip_target(c, args.target) for c in clips]
         _one_activity(args, [v for v in values if v is not None])
@@ -588,8 +588,8 @@ def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
 
 def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
     from cbr.training import describe, no_target_value
-    from features.datasets import clip_target
     from features.progress import progress
+    from features.targets import clip_target
 
     clips = _clips(args)
     solutions = []
@@ -690,7 +690,8 @@ def _note_csv_names(args: argparse.Namespace) -> None:
     """The codes that share a name in the ``label_names`` files of a labels CSV's recordings
     labelled over time, each file once, as ``--label-names`` (the stretches of such codes
     were merged in silence)."""
-    from features.datasets import detect_kind, read_labels_csv
+    from features.datasets import detect_kind
+    from features.labels_csv import read_labels_csv
 
     data = Path(args.data)
     if args.frame_labels is not None or detect_kind(data) != "csv":
@@ -754,10 +755,10 @@ def _read_frame_labels(args: argparse.Namespace) -> None:
     """Read the ``--frame-labels`` file (and its names) before the recording: a malformed or
     empty label file is one error at once, not after the recording is decoded (a video's
     poses estimated); so is a count that does not fit a pose file's or a constant-rate
-    video's frames (:func:`features.datasets.check_track`). Other recordings' counts are
+    video's frames (:func:`features.stretches.check_track`). Other recordings' counts are
     checked once read."""
-    from features.datasets import check_track
     from features.label_tracks import LabelTrack
+    from features.stretches import check_track
 
     track = LabelTrack(args.frame_labels, args.label_block, args.label_names)
     check_track(Path(args.data), track, args.fps)
@@ -812,7 +813,7 @@ def _note_cut_stretches(args: argparse.Namespace, entries: list[Any]) -> None:
     repetitions: such a stretch as one case lies far from any window (:func:`_default_split`),
     so ``train`` of the labels CSV that cut them makes a case per window. A file that cannot
     be read is left to the training to refuse."""
-    from features.datasets import POSE_SUFFIXES
+    from features.clips import POSE_SUFFIXES
     from features.errors import PoseFileError
     from features.poses import pose_file_length, pose_file_metadata
     from features.repetitions import WINDOW_S
