@@ -11,13 +11,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from features.errors import DataError
+from features.errors import DataError, PosecbrError
 from features.fileio import as_path, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 
 from .handedness import right_handed
-from .poses import EXTRACTION_VERSION, PoseSequence, load_pose
+from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, load_pose_arrays
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
 from .readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_sensor
@@ -121,6 +121,7 @@ def note_older_extraction(seq: PoseSequence, path: Path) -> None:
     meta = seq.metadata
     if "pose_model" not in meta or meta.get("extraction_version") == EXTRACTION_VERSION:
         return  # not from a video, or made by today's extraction
+    _note_kept_not_in_picture(seq, path)
     video = source_video(meta, path)
     have_video = video is not None
     if "variable_frame_rate" not in meta and not have_video:
@@ -135,6 +136,28 @@ def note_older_extraction(seq: PoseSequence, path: Path) -> None:
         print(
             f"note: {path}: made from a variable-frame-rate video by an older posecbr (its"
             " frames timed differently): `posecbr extract` of the video makes it again",
+            file=sys.stderr,
+        )
+
+
+def _note_kept_not_in_picture(seq: PoseSequence, path: Path) -> None:
+    """Say on stderr when a pose file of an older extraction keeps joint positions the model
+    judged not in the picture (:func:`features.pose_estimation.video.kept_not_in_picture`):
+    today's extraction stores them missing, so fluents are not stated on them."""
+    try:
+        from features.pose_estimation.video import kept_not_in_picture
+
+        image = load_pose_arrays(path).get("image_landmarks")
+    except (ImportError, PosecbrError):
+        return
+    if image is None:
+        return
+    kept = kept_not_in_picture(seq.metadata, seq.positions, image)
+    if kept:
+        print(
+            f"note: {path}: made by an older posecbr, which kept {kept} joint positions the"
+            " pose model judged not in the picture (presence below 0.5; fluents are stated on"
+            " them): `posecbr extract` of the video makes it again without them",
             file=sys.stderr,
         )
 

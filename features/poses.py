@@ -59,15 +59,16 @@ MAX_FPS = 10_000.0
 # overflowed.
 MAX_FRAME_INDEX = 2**53
 
-EXTRACTION_VERSION = 3
+EXTRACTION_VERSION = 4
 """How ``features.pose_estimation.estimate_video`` turns a video's frames into poses, written
 into each pose file's metadata (``extraction_version``) and bumped when that changes for some
 videos. None (absent): before it was written, when a variable-frame-rate video was timed as
 evenly spaced frames or (once its frame times were read) had every grid time blended from
 the frames around it; 2: frames before the first one off the grid taken as they are (as
 ``posecbr watch`` does); 3: grid times inside a gap of more than a quarter second between
-two decoded frames left missing, not blended across it. A constant-rate video's poses have
-been the same throughout."""
+two decoded frames left missing, not blended across it; 4: a landmark the model places inside
+the frame but judges not in the picture (presence below 0.5) stored missing, as one placed
+outside the frame is. A constant-rate video's frames have been timed the same throughout."""
 
 
 # Reading limits, checked from the archive's directory and the arrays' headers before anything

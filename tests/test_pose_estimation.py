@@ -326,22 +326,26 @@ def test_stream_poses_from_a_file_and_a_missing_camera(shared_data: Path) -> Non
 
 def test_a_streamed_frame_sees_what_extract_stores() -> None:
     """A 64 x 48 frame whose landmarks are all inside but the left ankle (x = 64: one pixel
-    past the last column) and the right ankle (y = -1): those two are missing in the world
-    landmarks the stream gives, as :func:`estimate_video` stores them; the rest as the model
-    gave them; the visibility is the image landmarks' fourth field."""
+    past the last column) and the right ankle (y = -1), and the left wrist inside it at a
+    presence of 0.3 (the model judges it not in the picture): those three are missing in the
+    world landmarks the stream gives, as :func:`estimate_video` stores them; the rest as the
+    model gave them, at whatever visibility; the visibility is the image landmarks' fourth
+    field."""
     from features.pose_estimation import StreamFrame
     from features.pose_estimation.tracker import FramePose
 
     image = np.zeros((33, 5))
     image[:, :2] = [10.0, 20.0]
     image[:, 3] = np.linspace(0.0, 1.0, 33)
+    image[:, 4] = 0.5  # presence: in the picture (0.5 and above)
     image[JOINT_INDEX["left_ankle"], 0] = 64.0
     image[JOINT_INDEX["right_ankle"], 1] = -1.0
+    image[JOINT_INDEX["left_wrist"], 4] = 0.3
     world = np.arange(99.0).reshape(33, 3)
     frame = StreamFrame(0, 0.0, FramePose(image, world, True, True, 1.0, None),
                         np.zeros((48, 64, 3), dtype=np.uint8))  # fmt: skip
     seen = frame.seen_world
-    gone = [JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"]]
+    gone = [JOINT_INDEX["left_ankle"], JOINT_INDEX["right_ankle"], JOINT_INDEX["left_wrist"]]
     assert np.isnan(seen[gone]).all()
     kept = np.setdiff1d(np.arange(33), gone)
     np.testing.assert_array_equal(seen[kept], world[kept])

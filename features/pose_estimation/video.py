@@ -937,9 +937,9 @@ def variable_rate(path: str | Path) -> bool:
 
 def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     """Whether a pose file (its metadata ``meta``) was made from ``video``, a
-    variable-frame-rate video, by extraction code older than today's
-    (:data:`EXTRACTION_VERSION`): its poses differ from what extracting the video now gives.
-    A file of the current version, or of a newer posecbr's, is not; one of an older version
+    variable-frame-rate video, by extraction code that timed its frames otherwise than
+    today's (:data:`EXTRACTION_VERSION` below 3): its poses differ from what extracting the
+    video now gives. A file of version 3 or later is not; one of an older version
     or none (written before the version was) is when its metadata says it was resampled
     (version 2: when its frames lay further apart than is bridged now, :func:`bridge_limit_s`); one
     without the version that does not say so (the oldest code did not notice a variable
@@ -947,8 +947,8 @@ def older_vfr_extraction(meta: Mapping[str, Any], video: str | Path) -> bool:
     stray from its declared rate. A constant-rate video's pose file never is: its poses are
     what they were."""
     version = meta.get("extraction_version")
-    if isinstance(version, int | float) and version >= EXTRACTION_VERSION:
-        return False  # today's, or a newer posecbr's: not older
+    if isinstance(version, int | float) and version >= 3:
+        return False  # timed as today's (version 4 changed which joints are kept, not times)
     vfr = meta.get("variable_frame_rate")
     if isinstance(version, int | float) and version >= 2 and isinstance(vfr, Mapping):
         return _blended_a_gap(vfr)  # version 2 differs only where it blended across a gap
@@ -1101,6 +1101,53 @@ def outside_frame(image_landmarks: np.ndarray, width: int, height: int) -> np.nd
         return (x < 0) | (y < 0) | (x >= width) | (y >= height)
 
 
+MIN_PRESENCE = 0.5
+"""The presence (the landmark model's probability that a landmark is in the picture) below
+which a landmark the model places inside the frame is not in the picture either: MediaPipe's
+own threshold (its drawing utilities leave out a landmark below 0.5). Such a landmark sits at
+the frame's edge where the limb leaves it (a knee below the bottom edge put on the thigh), or
+stands for a hand or foot the model does not find. Visibility is another thing (in the
+picture but hidden: the far side's limbs in a side view, well placed) and is not cut."""
+
+
+def not_in_picture(image_landmarks: np.ndarray, width: int, height: int) -> np.ndarray:
+    """``(..., 33)`` True where a landmark is not in the picture: placed outside the
+    ``width x height`` frame (:func:`outside_frame`), or inside it at a presence below
+    :data:`MIN_PRESENCE`. :func:`estimate_video` stores these missing (NaN), as ``watch``
+    reads them (:attr:`StreamFrame.seen_world`)."""
+    with np.errstate(invalid="ignore"):
+        unlikely = image_landmarks[..., 4] < MIN_PRESENCE
+    return outside_frame(image_landmarks, width, height) | unlikely
+
+
+PRESENCE_VERSION = 4
+"""The :data:`EXTRACTION_VERSION` from which landmarks not in the picture at a presence below
+:data:`MIN_PRESENCE` are stored missing (:func:`not_in_picture`)."""
+
+
+def kept_not_in_picture(
+    meta: Mapping[str, Any], positions: np.ndarray, image_landmarks: np.ndarray
+) -> int:
+    """How many joint positions a pose file (its metadata ``meta``, ``positions`` and stored
+    image landmarks) keeps where the model judged the joint not in the picture (presence
+    below :data:`MIN_PRESENCE`) though its joints outside the frame were set missing: a file
+    of an extraction older than :data:`PRESENCE_VERSION` (today's stores them missing). 0
+    for a file of that version or later, one extracted keeping them (``keep_outside``), one
+    not made from a video, or image landmarks that do not match its frames."""
+    version = meta.get("extraction_version")
+    if isinstance(version, int | float) and version >= PRESENCE_VERSION:
+        return 0
+    if "pose_model" not in meta or meta.get("joints_outside_frame_set_missing") is False:
+        return 0
+    lm = np.asarray(image_landmarks)
+    pos = np.asarray(positions)
+    if lm.ndim != 3 or lm.shape[2] < 5 or lm.shape[:2] != pos.shape[:2]:
+        return 0
+    with np.errstate(invalid="ignore"):
+        unlikely = lm[..., 4] < MIN_PRESENCE
+    return int((unlikely & np.isfinite(pos).all(axis=2)).sum())
+
+
 def _room(clock: FrameClock, index: int, max_frames: int | None) -> int:
     """How many frames after frame ``index`` may be read to time it (:attr:`FrameClock.run`,
     no further than ``max_frames``)."""
@@ -1156,8 +1203,10 @@ def estimate_video(
     landmarks; frames without a person are NaN and listed in ``missing`` (and in the
     sequence's metadata). ``max_frames``: stop after that many frames (the truncation check is
     then skipped). A joint the model places outside the frame (e.g. legs below the bottom
-    edge) is not seen, so its position is set missing (NaN) in the sequence unless
-    ``keep_outside``; the image landmarks keep the model's guess and its (low) visibility.
+    edge) is not seen, nor one it places inside the frame but judges not in the picture
+    (presence below :data:`MIN_PRESENCE`, :func:`not_in_picture`), so its position is set
+    missing (NaN) in the sequence unless ``keep_outside``; the image landmarks keep the
+    model's guess, its visibility and its presence.
     ``decode_threads``: FFmpeg's decoding threads (None: one per core; see :func:`open_video`).
     A video whose frame times are irregular (variable frame rate: see the module docstring)
     is resampled to a uniform grid at its declared rate; ``announce`` says so in one line on
@@ -1189,9 +1238,11 @@ def estimate_video(
     image_lm = np.stack(image)
     positions = np.stack(world)
     outside = np.zeros(image_lm.shape[:2], dtype=bool)
+    unseen = outside
     if not keep_outside:
         outside = outside_frame(image_lm, info.width, info.height)
-        positions[outside] = np.nan
+        unseen = not_in_picture(image_lm, info.width, info.height)
+        positions[unseen] = np.nan
     elapsed = np.asarray(times)
     video_frames = None
     vfr: dict[str, object] | None = None
@@ -1230,6 +1281,8 @@ def estimate_video(
         "tracking": est.tracking,
         "joints_outside_frame_set_missing": not keep_outside,
         "n_joint_samples_outside_frame": int(outside.sum()),
+        "min_presence": MIN_PRESENCE,
+        "n_joint_samples_not_present": int((unseen & ~outside).sum()),
         "coordinates": "world landmarks, metres, x right, y up, z toward the camera, "
         "origin at the hip centre",
     }
@@ -1435,10 +1488,11 @@ class StreamFrame:
     @property
     def seen_world(self) -> np.ndarray:
         """The world landmarks ``(33, 3)`` as :func:`estimate_video` stores them: a joint the
-        model places outside the frame is not seen, so it is missing (NaN)."""
+        model places outside the frame, or judges not in the picture, is not seen, so it is
+        missing (NaN) (:func:`not_in_picture`)."""
         height, width = self.rgb.shape[:2]
         world = self.pose.world.copy()
-        world[outside_frame(self.pose.image, width, height)] = np.nan
+        world[not_in_picture(self.pose.image, width, height)] = np.nan
         return world
 
     @property

@@ -149,7 +149,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--keep-outside",
         action="store_true",
-        help="keep joints the model places outside the frame (default: missing)",
+        help="keep joints the model places outside the frame or judges not in the picture"
+        " (presence below 0.5) (default: missing)",
     )
     p.add_argument("--scheduler", metavar="ADDRESS|local:N", help=SCHEDULER_HELP)
     p.add_argument("--force", action="store_true", help="re-extract even if up to date")
@@ -629,6 +630,40 @@ def stored_key(path: Path) -> dict[str, Any] | None:
 STALE_VFR = "made from a variable-frame-rate video by an older posecbr: extracted again"
 """Said of a pose file ``older_vfr_extraction`` found stale (the clip's line; a note)."""
 
+STALE_PRESENCE = (
+    "made by an older posecbr, which kept joints the model judged not in the picture:"
+    " extracted again"
+)
+"""Said of a pose file ``kept_not_in_picture`` found stale (the clip's line; a note)."""
+
+
+def _kept_not_in_picture(path: Path, meta: dict[str, Any]) -> bool:
+    """Whether the pose file at ``path`` (its metadata ``meta``) is an older extraction's that
+    kept joints the model judged not in the picture
+    (:func:`features.pose_estimation.video.kept_not_in_picture`); False when it cannot tell."""
+    from features.pose_estimation.video import PRESENCE_VERSION, kept_not_in_picture
+    from features.poses import load_pose, load_pose_arrays
+
+    version = meta.get("extraction_version")
+    if isinstance(version, int | float) and version >= PRESENCE_VERSION:
+        return False  # no need to read its arrays
+    try:
+        image = load_pose_arrays(path).get("image_landmarks")
+        positions = load_pose(path).positions
+    except PosecbrError:
+        return False
+    return image is not None and kept_not_in_picture(meta, positions, image) > 0
+
+
+def _stale(job: Job, meta: dict[str, Any]) -> str:
+    """Why the pose file ``job.out`` (its metadata ``meta``), made with today's options, is
+    made again (:data:`STALE_VFR`, :data:`STALE_PRESENCE`); "" when it is up to date."""
+    from features.pose_estimation.video import older_vfr_extraction
+
+    if older_vfr_extraction(meta, job.video):
+        return STALE_VFR
+    return STALE_PRESENCE if _kept_not_in_picture(job.out, meta) else ""
+
 
 # onnxruntime threads per model in this process (None: default). FFmpeg keeps its own
 # decoding threads: pinned to the worker's one thread, 2 workers on 2 cores went from 103.5 to
@@ -748,7 +783,7 @@ def process(job: Job, options: Options) -> Outcome:
 
     from features.pose_estimation import open_video
     from features.pose_estimation.overlay import check_mp4_size, padding_words, write_overlay
-    from features.pose_estimation.video import gap_words, older_vfr_extraction
+    from features.pose_estimation.video import gap_words
     from features.poses import gap_rows, load_pose, load_pose_arrays, recorded_gaps
     from features.repetitions import person_jumps
 
@@ -757,7 +792,7 @@ def process(job: Job, options: Options) -> Outcome:
         key = extract_key(job, options, digest)
         meta = None if options.force or not job.out.is_file() else stored_metadata(job.out)
         up_to_date = meta is not None and meta.get("extract_key") == key
-        stale = up_to_date and older_vfr_extraction(meta or {}, job.video)
+        stale = _stale(job, meta or {}) if up_to_date else ""
         up_to_date = up_to_date and not stale
         if up_to_date and (job.overlay is None or job.overlay.is_file()):
             return "skipped", job.out, "up to date"
@@ -806,7 +841,7 @@ def process(job: Job, options: Options) -> Outcome:
         detail = f"{_frames_at(seq, video_frames)}, {n_missing} without a person{unseen}{vfr_note}"
         if up_to_date:
             return "drawn", job.out, f"up to date, {detail}; its overlay drawn"
-        return "done", job.out, f"{detail}; {STALE_VFR}" if stale else detail
+        return "done", job.out, f"{detail}; {stale}" if stale else detail
     except PosecbrError as exc:
         return "failed", job.out, str(exc)
 
