@@ -20,7 +20,9 @@ Protocol
 - Statistics (:mod:`cbr.evaluation.stats`): accuracy with a Wilson 95 % interval; macro-F1 with
   a percentile bootstrap, under leave-one-subject-out over subjects and then the clips of each
   drawn subject (one person's clips share the errors made on that person), else over clips;
-  per-class recall with Wilson intervals; McNemar's exact (binomial) test of every method
+  under leave-one-subject-out the accuracy on every subject held out, with its mean, sample
+  standard deviation and minimum over the subjects (none under k-fold, whose folds are not
+  people); per-class recall with Wilson intervals; McNemar's exact (binomial) test of every method
   against the best one on the same clips.
 """
 
@@ -160,10 +162,10 @@ def _method_result(
     skipped: dict[int, str],
     fold_results: list[FoldResult],
     settings: CompareSettings,
-    clusters: np.ndarray | None = None,
+    subjects: np.ndarray | None = None,
 ) -> MethodResult:
-    """Method ``mi``'s row: skipped, failed (the first fold's error), or scored (``clusters``
-    ``(n,)``: what macro-F1's bootstrap resamples whole, None for clips)."""
+    """Method ``mi``'s row: skipped, failed (the first fold's error), or scored (``subjects``
+    ``(n,)``: every clip's subject under leave-one-subject-out, else None)."""
     head = (m.name, m.kind, m.interpretable, dict(m.params))
     if mi in skipped:
         return MethodResult(*head, "skipped", skipped[mi])
@@ -174,7 +176,7 @@ def _method_result(
     pred = np.empty(len(data.y), dtype=object)
     for r in mine:
         pred[r.test] = r.pred
-    return MethodResult(*head, "ok", "", score(data, pred, mine, settings, clusters))
+    return MethodResult(*head, "ok", "", score(data, pred, mine, settings, subjects))
 
 
 def _status_notes(rows: list[MethodResult]) -> list[str]:
@@ -236,10 +238,11 @@ def run_compare(
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)
     ctx = RunContext(data, tuple(methods), folds, active, int(settings.peer_length))
     fold_results = _run_tasks(ctx, int(settings.jobs), settings.scheduler)
-    # leave one subject out: a fold is a subject, and the bootstrap draws subjects whole
-    clusters = folds if scheme == "loso" else None
+    # leave one subject out: a fold is a subject, the bootstrap draws subjects whole and the
+    # accuracy is given per subject
+    subjects = np.array([str(s) for s in data.subjects]) if scheme == "loso" else None
     rows = [
-        _method_result(mi, m, data, skipped, fold_results, settings, clusters)
+        _method_result(mi, m, data, skipped, fold_results, settings, subjects)
         for mi, m in enumerate(methods)
     ]
     best, best_interpretable = best_methods(rows)
@@ -252,7 +255,7 @@ def run_compare(
             scheme,
             len(set(folds.tolist())),
             folds.tolist(),
-            "clips" if clusters is None else "subjects",
+            "clips" if subjects is None else "subjects",
         ),
         notes=data.notes
         + fold_notes

@@ -29,7 +29,7 @@ from features.text import size_words
 
 from ..explain import class_noun
 from .pictures import Drawing, result_pictures
-from .results import CompareResults, MethodResult, Rate, Scores
+from .results import CompareResults, MethodResult, Rate, Scores, spread
 from .tables import p_value
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -148,7 +148,21 @@ def _figure(images: Mapping[str, Path], name: str | None, alt: str, caption: str
     return f"<figure>{img}<figcaption>{e(caption)}</figcaption></figure>" if img else ""
 
 
-def _method_row(results: CompareResults, m: MethodResult, s: Scores) -> str:
+def _person_cell(s: Scores) -> str:
+    """The accuracy over the subjects held out: ``mean ± sd`` (min) in %, its max in the
+    tooltip."""
+    spread = s.subject_spread()
+    if spread is None:
+        return "<td></td>"
+    mean, sd, low, high = spread
+    sd_text = _pct(sd) or "n/a"
+    return (
+        f"<td title='{e(len(s.per_subject))} subjects; max {_pct(high)}'>"
+        f"{_pct(mean)} ± {sd_text} ({_pct(low)})</td>"
+    )
+
+
+def _method_row(results: CompareResults, m: MethodResult, s: Scores, person: bool) -> str:
     cls = " class='best'" if m.name == results.best_interpretable else ""
     cb = "" if s.case_base_size is None else e(f"{s.case_base_size:.0f}")
     p = "best" if m.name == results.best else p_value(s.mcnemar.p if s.mcnemar else float("nan"))
@@ -158,34 +172,47 @@ def _method_row(results: CompareResults, m: MethodResult, s: Scores) -> str:
         f"<td>{_pct(s.accuracy_ci[0])}–{_pct(s.accuracy_ci[1])}</td>"
         f"<td>{_pct(s.macro_f1)}</td>"
         f"<td>{_pct(s.macro_f1_ci[0])}–{_pct(s.macro_f1_ci[1])}</td>"
+        f"{_person_cell(s) if person else ''}"
         f"<td>{e(f'{s.fit_s:.2f}')}</td><td>{e(f'{s.predict_ms_per_clip:.2f}')}</td>"
         f"<td>{cb}</td><td>{e(p)}</td></tr>"
     )
 
 
+def _has_person(results: CompareResults) -> bool:
+    """Whether the results give the accuracy per subject held out."""
+    return any(s.per_subject for _, s in results.scored())
+
+
 def _table(results: CompareResults) -> str:
+    person = _has_person(results)
     rows = [
         "<table id='results'><thead><tr><th class='l'>method</th><th>accuracy %</th>"
-        "<th>95 % CI</th><th>macro-F1 %</th><th>95 % CI</th><th>fit s</th>"
-        "<th>ms / clip</th><th>case base</th><th>McNemar p vs best</th></tr></thead><tbody>"
+        "<th>95 % CI</th><th>macro-F1 %</th><th>95 % CI</th>"
+        + ("<th>per person % ± sd (min)</th>" if person else "")
+        + "<th>fit s</th><th>ms / clip</th><th>case base</th><th>McNemar p vs best</th>"
+        "</tr></thead><tbody>"
     ]
     for m in results.methods:
         if m.scores is None:
             rows.append(
-                f"<tr><td class='l'>{e(m.name)}</td><td class='l' colspan='8'>"
+                f"<tr><td class='l'>{e(m.name)}</td><td class='l' colspan='{9 if person else 8}'>"
                 f"{e(m.status)}: {e(m.message)}</td></tr>"
             )
         else:
-            rows.append(_method_row(results, m, m.scores))
+            rows.append(_method_row(results, m, m.scores, person))
     rows.append("</tbody></table>")
     return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
 def _rate_table(
-    ok: list[tuple[str, dict[str, Rate]]], keys: list[str], table_id: str, what: str
+    ok: list[tuple[str, dict[str, Rate]]],
+    keys: list[str],
+    table_id: str,
+    what: str,
+    extra: str = "",
 ) -> str:
     """Methods as columns, ``keys`` as rows: each method's rate per key in %, its 95 %
-    interval as the cell's tooltip."""
+    interval as the cell's tooltip; ``extra``: rows (HTML) after them."""
     head = "".join(f"<th>{e(name)}</th>" for name, _ in ok)
     rows = [
         f"<table id='{e(table_id)}'><thead><tr><th class='l'>{e(what)} (n)</th>{head}</tr>"
@@ -201,7 +228,7 @@ def _rate_table(
         )
         n = next((rates[key].n for _, rates in ok if key in rates), 0)
         rows.append(f"<tr><td class='l'>{e(key)} ({e(n)})</td>{cells}</tr>")
-    rows.append("</tbody></table>")
+    rows.append(extra + "</tbody></table>")
     return "<div class='wide'>" + "\n".join(rows) + "</div>"
 
 
@@ -220,6 +247,34 @@ def _group_table(results: CompareResults) -> str:
     within = str(results.settings.get("within") or "group")
     table = _rate_table(ok, list(ok[0][1]), "groups", within)
     return f"<h2>Accuracy per {e(within)} (%)</h2>{table}"
+
+
+def _subject_table(results: CompareResults) -> str:
+    """Accuracy per subject held out (leave-one-subject-out), then its mean ± sd and min
+    over them; under k-fold, or for a file written before, why there is none."""
+    ok = [(m.name, s.per_subject) for m, s in results.scored() if s.per_subject]
+    if not ok:
+        why = (
+            "this results file was written before it was given"
+            if results.cv.scheme == "loso"
+            else f"{results.cv.scheme} folds are not people held out one by one"
+        )
+        return f"<p class='small' id='no-person'>No accuracy per person: {e(why)}.</p>"
+    keys = sorted({p for _, rates in ok for p in rates})
+    spreads = [x for _, rates in ok if (x := spread(rates)) is not None]
+    mean_sd = "".join(f"<td>{_pct(x[0])} ± {_pct(x[1]) or 'n/a'}</td>" for x in spreads)
+    low_high = "".join(f"<td>{_pct(x[2])}–{_pct(x[3])}</td>" for x in spreads)
+    summary = (
+        f"<tr class='spread'><td class='l'>mean ± sd</td>{mean_sd}</tr>"
+        f"<tr class='spread'><td class='l'>min–max</td>{low_high}</tr>"
+    )
+    table = _rate_table(ok, keys, "subjects", "subject held out", summary)
+    return (
+        "<h2>Accuracy per person held out (%)</h2><p class='small'>Each subject's clips"
+        " predicted by the models trained without them (its 95 % Wilson interval as the"
+        " cell's tooltip); the mean weighs every subject the same, the sd is the sample"
+        " standard deviation over the subjects.</p>" + table
+    )
 
 
 def _explanations(results: CompareResults) -> str:
@@ -333,12 +388,19 @@ def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
         "<p class='small'>Accuracy with Wilson 95 % interval; macro-F1 with bootstrap 95 % "
         f"interval over {_bootstrap_over(results)}; fit and predict times summed over folds; "
         "case base = cases kept after trimming (mean over folds); McNemar exact test against "
-        "the best method on the same clips.</p>",
+        "the best method on the same clips"
+        + (
+            "; per person = the accuracy on each subject held out: mean ± sample sd (lowest)"
+            if _has_person(results)
+            else ""
+        )
+        + ".</p>",
         _table(results),
         fig["accuracy"],
         "<h2>Recall per class (%)</h2>",
         _recall_table(results),
         _group_table(results),
+        _subject_table(results),
         fig["confusion"],
         fig["prevalence"],
         "<h2>Explanations of misclassified clips</h2>",

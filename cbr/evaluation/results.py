@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import PurePosixPath, PureWindowsPath
 from typing import Any, NoReturn, TypeVar
 
+import numpy as np
+
 from features.errors import DataError
 
 KIND = "posecbr-compare"
@@ -183,11 +185,23 @@ class McNemar:
     p: float
 
 
+def spread(rates: dict[str, Rate]) -> tuple[float, float, float, float] | None:
+    """Mean, sample standard deviation, min and max of the rates' values (each subject
+    weighs the same, however many clips it has; the deviation NaN for one value), None for
+    no rate."""
+    if not rates:
+        return None
+    v = np.array([r.value for r in rates.values()])
+    sd = float(v.std(ddof=1)) if len(v) > 1 else math.nan
+    return float(v.mean()), sd, float(v.min()), float(v.max())
+
+
 @dataclass(frozen=True)
 class Scores:
-    """How a method that ran did: figures over all clips, per class, per model group, the
-    confusion matrix ``(classes, classes)`` (``unassigned``: predictions outside the classes,
-    per true class), costs summed over folds, and every clip's prediction."""
+    """How a method that ran did: figures over all clips, per class, per model group, per
+    subject held out (leave-one-subject-out only), the confusion matrix ``(classes,
+    classes)`` (``unassigned``: predictions outside the classes, per true class), costs
+    summed over folds, and every clip's prediction."""
 
     accuracy: float
     accuracy_ci: tuple[float, float]
@@ -206,6 +220,12 @@ class Scores:
     correct: list[bool]
     fold_notes: list[str]
     mcnemar: McNemar | None = None
+    per_subject: dict[str, Rate] = field(default_factory=dict)
+
+    def subject_spread(self) -> tuple[float, float, float, float] | None:
+        """Accuracy over the subjects held out: mean, sd, min, max (:func:`spread`); None
+        when not left out one by one (k-fold, or a file written before)."""
+        return spread(self.per_subject)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -215,6 +235,7 @@ class Scores:
             "macro_f1_ci": list(self.macro_f1_ci),
             "per_class": {c: v.to_dict("recall") for c, v in self.per_class.items()},
             "per_group": {g: v.to_dict("accuracy") for g, v in self.per_group.items()},
+            "per_subject": {p: v.to_dict("accuracy") for p, v in self.per_subject.items()},
             "confusion": [list(row) for row in self.confusion],
             "unassigned": list(self.unassigned),
             "fit_s": self.fit_s,
@@ -263,6 +284,10 @@ class Scores:
             correct=r.items(d, "correct", where, "bool"),
             fold_notes=r.items(d, "fold_notes", where, "str"),
             mcnemar=mcnemar,
+            # absent in a file written before it was (or under k-fold): none
+            per_subject=_rates(r, d, "per_subject", where, "accuracy")
+            if "per_subject" in d
+            else {},
         )
 
 

@@ -27,6 +27,14 @@ def _per_group(data: Prepared, correct: np.ndarray) -> dict[str, Rate]:
     return {str(g): _rate(correct[data.within == g]) for g in sorted(set(data.within.tolist()))}
 
 
+def _per_subject(subjects: np.ndarray | None, correct: np.ndarray) -> dict[str, Rate]:
+    """Accuracy on every subject held out (sorted); empty when subjects were not held out
+    one by one."""
+    if subjects is None:
+        return {}
+    return {str(p): _rate(correct[subjects == p]) for p in sorted(set(subjects.tolist()))}
+
+
 def _mean_case_base(results: list[FoldResult]) -> float | None:
     """Cases kept after trimming, mean over the folds that built a case base."""
     sizes = [r.case_base_size for r in results if r.case_base_size is not None]
@@ -38,12 +46,13 @@ def score(
     pred: np.ndarray,
     results: list[FoldResult],
     settings: CompareSettings,
-    clusters: np.ndarray | None = None,
+    subjects: np.ndarray | None = None,
 ) -> Scores:
     """The figures of one method from its predictions ``(n,)`` of every clip's target.
 
-    clusters: ``(n,)`` what macro-F1's bootstrap resamples whole (every clip's subject under
-    leave-one-subject-out), or None to resample clips.
+    subjects: ``(n,)`` every clip's subject under leave-one-subject-out: macro-F1's bootstrap
+    resamples them whole and the accuracy is given per subject; None (k-fold) to resample
+    clips, with no accuracy per subject.
 
     A prediction outside the target classes (e.g. DAD's answer for an activity the target
     does not name) counts as wrong and is kept in ``unassigned``.
@@ -63,7 +72,7 @@ def score(
         accuracy_ci=wilson_interval(int(correct.sum()), n),
         macro_f1=macro_f1(t, p),
         macro_f1_ci=bootstrap_macro_f1(
-            t, p, other + 1, int(settings.bootstrap), seed=int(settings.seed), groups=clusters
+            t, p, other + 1, int(settings.bootstrap), seed=int(settings.seed), groups=subjects
         ),
         per_class={c: _rate(correct[t == i]) for c, i in code.items()},
         per_group=_per_group(data, correct),
@@ -77,6 +86,7 @@ def score(
         predictions=[str(v) for v in pred],
         correct=correct.tolist(),
         fold_notes=sorted({note for r in results for note in r.notes}),
+        per_subject=_per_subject(subjects, correct),
     )
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from pathlib import Path
 from typing import Any
 
@@ -19,34 +20,78 @@ def p_value(p: float) -> str:
     return "<1e-300" if p < 1e-300 else f"{p:.3g}"
 
 
-def _row(results: CompareResults, m: MethodResult, s: Scores, width: int) -> str:
+#: the per-person column's heading: the accuracy on the subjects held out one by one
+PERSON = "person % ± sd (min)"
+
+
+def _person(s: Scores) -> str:
+    """The accuracy over the subjects held out, ``mean ± sd (min)`` in %; empty without."""
+    spread = s.subject_spread()
+    if spread is None:
+        return ""
+    mean, sd, low, _ = (100 * x for x in spread)
+    return f"{mean:.1f} ± {'n/a' if math.isnan(sd) else f'{sd:.1f}'} ({low:.1f})"
+
+
+def _row(results: CompareResults, m: MethodResult, s: Scores, width: int, person: bool) -> str:
     acc = f"{100 * s.accuracy:5.1f} [{100 * s.accuracy_ci[0]:4.1f}, {100 * s.accuracy_ci[1]:5.1f}]"
     f1 = f"{100 * s.macro_f1:5.1f} [{100 * s.macro_f1_ci[0]:4.1f}, {100 * s.macro_f1_ci[1]:5.1f}]"
-    cases = "" if s.case_base_size is None else f"{s.case_base_size:.0f}"
     p = s.mcnemar.p if s.mcnemar is not None else float("nan")
     pv = "best" if m.name == results.best else p_value(p)
     mark = " *" if m.name == results.best_interpretable else ""
-    return (
-        f"{m.name + mark:<{width}} {acc:<22} {f1:<22} {s.fit_s:8.2f} "
-        f"{s.predict_ms_per_clip:8.2f} {cases:>7} {pv:>10}"
+    spread = f" {_person(s):>{len(PERSON)}}" if person else ""
+    return f"{m.name + mark:<{width}} {acc:<22} {f1:<22}{spread} {pv:>9}"
+
+
+def _legend(results: CompareResults, person: bool) -> list[str]:
+    """What the per-person column holds (or why there is none), and what macro-F1's interval
+    resampled (``cv.bootstrap_over``)."""
+    if person:
+        n = len(results.dataset.subjects)
+        what = f"person: the accuracy on each of the {n} subjects held out: mean ± sample sd (min)"
+    elif results.cv.scheme == "loso":
+        what = "no accuracy per person: this results file was written before it was given"
+    else:  # k-fold, or folds given: a fold holds any person's clips
+        what = f"no accuracy per person: {results.cv.scheme} folds are not people held out"
+    drawn = (
+        "subjects, then each one's clips" if results.cv.bootstrap_over == "subjects" else "clips"
     )
+    return [what, f"macro-F1's 95 % interval: bootstrap over {drawn}"]
+
+
+def _costs(results: CompareResults, width: int) -> list[str]:
+    """Training and prediction time and case-base size of every method that ran."""
+    head = f"{'method':<{width}} {'fit s':>9} {'ms/clip':>9} {'cases':>7}"
+    lines = ["", head, "-" * len(head)]
+    for m, s in results.scored():
+        cases = "" if s.case_base_size is None else f"{s.case_base_size:.0f}"
+        lines.append(
+            f"{m.name:<{width}} {s.fit_s:9.2f} {s.predict_ms_per_clip:9.2f} {cases:>7}".rstrip()
+        )
+    return lines
 
 
 def format_table(results: CompareResults) -> str:
-    """The comparison as a plain-text table in method order (``*``: best interpretable), then
-    the accuracy per model group when there are groups."""
+    """The comparison as a plain-text table in method order (``*``: best interpretable; the
+    accuracy per person under leave-one-subject-out), what it holds, the costs (time, case
+    base) of each method, then the accuracy per model group when there are groups."""
     # the method column holds the longest name with its " *" ("cbr fluents/euclidean *": 23)
     width = max([22, *(len(m.name) + 2 for m in results.methods)])
+    person = any(s.per_subject for _, s in results.scored())
+    spread = f" {PERSON}" if person else ""
     head = (
-        f"{'method':<{width}} {'accuracy % [95 % CI]':<22} {'macro-F1 % [95 % CI]':<22} "
-        f"{'fit s':>8} {'ms/clip':>8} {'cases':>7} {'McNemar p':>10}"
+        f"{'method':<{width}} {'accuracy % [95 % CI]':<22} {'macro-F1 % [95 % CI]':<22}"
+        f"{spread} {'McNemar p':>9}"
     )
     lines = [head, "-" * len(head)]
     for m in results.methods:
         if m.scores is None:
             lines.append(f"{m.name:<{width}} {m.status}: {m.message}")
         else:
-            lines.append(_row(results, m, m.scores, width))
+            lines.append(_row(results, m, m.scores, width, person))
+    lines += _legend(results, person)
+    if results.scored():
+        lines += _costs(results, width)
     return "\n".join(lines + group_table(results))
 
 
@@ -86,17 +131,25 @@ def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
         "mcnemar_p": None if s.mcnemar is None else s.mcnemar.p,
         "mcnemar_vs": None if s.mcnemar is None else s.mcnemar.versus,
     }
+    spread = s.subject_spread()
+    for key, v in zip(("mean", "sd", "min", "max"), spread or (None,) * 4, strict=True):
+        # NaN (one subject's sd) as an empty cell, as a figure of a row that did not run
+        row[f"person_{key}"] = None if v is None or math.isnan(v) else round(v, 6)
     row.update({f"recall:{c}": round(s.per_class[c].value, 6) for c in classes})
     # the accuracy per model group the table prints under it (per movement with --target)
     row.update({f"accuracy:{g}": round(r.value, 6) for g, r in s.per_group.items()})
+    # and per subject held out (leave-one-subject-out only)
+    row.update({f"subject:{p}": round(r.value, 6) for p, r in s.per_subject.items()})
     return row
 
 
 def csv_rows(results: CompareResults) -> list[dict[str, Any]]:
     """One row per method: the table's figures (``mcnemar_vs``: the best method, tested
-    against), per-class recall (``recall:CLASS``) and, with model groups, the accuracy per
-    group printed under the table (``accuracy:GROUP``); ``message`` for one that did not
-    run."""
+    against; ``person_mean``, ``person_sd``, ``person_min``, ``person_max``: the accuracy
+    over the subjects held out, empty under k-fold), per-class recall (``recall:CLASS``),
+    with model groups the accuracy per group printed under the table (``accuracy:GROUP``),
+    the accuracy per subject held out (``subject:SUBJECT``); ``message`` for one that did
+    not run."""
     rows = []
     for m in results.methods:
         row: dict[str, Any] = {
