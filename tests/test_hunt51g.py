@@ -169,6 +169,7 @@ def test_a_repetition_check_of_several_activities_is_noted(
     """The test clips: two activities (deep and shallow squats), correct and incorrect.
     Trained as one repetition check, a note says one per activity judges better."""
     (_, test), _ = made_once(tmp_path_factory, "classify-output", _data_and_stores)
+    capsys.readouterr()  # the notes of the fixture's own training, when made here
     db = str(tmp_path / "check.sqlite")
     assert main(["train", str(test), "--db", db, "--target", "correct"]) == 0
     notes = [line for line in capsys.readouterr().err.splitlines() if "activities (" in line]
@@ -176,7 +177,9 @@ def test_a_repetition_check_of_several_activities_is_noted(
     assert notes[0].startswith(
         "note: a case base predicting 'correct' of 2 activities (deep squat, shallow squat): "
         "each repetition is judged among every activity's cases; one per activity (posecbr "
-        "train DATA --labels ACTIVITY --target correct"
+        "train DATA --labels ACTIVITY --target correct, as compare --target correct trains "
+        "them) judges it among its own activity's cases only: expect more of a new person's "
+        'repetitions judged right (README, "A patient\'s session, repetition by repetition")'
     )
     assert main(["train", str(test), "--db", str(tmp_path / "labels.sqlite")]) == 0
     assert "activities (" not in capsys.readouterr().err

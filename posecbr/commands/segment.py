@@ -813,7 +813,7 @@ def load_case_base(db: str, name: str | None) -> Any:
 def note_not_windows(stored: Any, db: str, command: str, each: bool = False) -> None:
     """Note, on stderr, a case base whose cases are whole clips or repetitions (``train``
     without ``--split`` or ``--split repetitions``; its model records it): ``command``
-    (``segment``, ``watch``) classifies 2-s windows, which such cases answer far worse, and
+    (``segment``, ``watch``) classifies 2-s windows, which such cases answer worse, why, and
     how to train a case base of windows. Said once per command; a case base stored before
     its cases were recorded (``cases`` None) or of windows says nothing. A repetition check
     (``train --target correct``) is noted by ``segment`` instead with how each repetition is
@@ -823,11 +823,11 @@ def note_not_windows(stored: Any, db: str, command: str, each: bool = False) -> 
     from cbr.words import CASE_KINDS
     from features.repetitions import WINDOW_S
 
-    measured = {  # README "Long recordings"; repetitions: hunt 39m, again 44j (jogs in cycles)
-        "clips": "CMU subject 13: 33-61 % of a recording's 0.1-s blocks segmented right, "
-        "against 94-99 %",
-        "repetitions": "CMU 13_31 against 13_29 and 13_30: 81 % of its 0.1-s blocks "
-        "segmented right, against 94 %",
+    why = {  # the figures: README, "Training from long recordings" (hunt 39m, 44j)
+        "clips": "a clip of many repetitions is one case, far from any window of it: expect "
+        "far fewer windows labelled right than",
+        "repetitions": "a repetition is one case from rest to rest, where a window starts "
+        "anywhere in a movement: expect fewer windows labelled right than",
     }
     if command == "watch" and is_repetition_check(stored.classifier):
         if not each:  # --split repetitions: each repetition judged by the case base as trained
@@ -846,16 +846,16 @@ def note_not_windows(stored: Any, db: str, command: str, each: bool = False) -> 
             file=sys.stderr,
         )
         return
-    if stored.cases not in measured:
+    if stored.cases not in why:
         return
     where = shown_db(db)
     source = "the stream" if command == "watch" else "a recording"
     print(
         f"note: case base {stored.name!r} of {where} holds a case per "
         f"{CASE_KINDS[stored.cases]}: {command} classifies {WINDOW_S:g}-s windows of "
-        f"{source}, not whole {stored.cases} ({measured[stored.cases]} with a case per "
-        f"window); to train a case base of windows: posecbr train DATA --db {where} "
-        "--name NAME --split windows",
+        f"{source}, not whole {stored.cases} ({why[stored.cases]} with a case per window;"
+        ' README, "Training from long recordings"); to train a case base of windows: '
+        f"posecbr train DATA --db {where} --name NAME --split windows",
         file=sys.stderr,
     )
 

@@ -723,8 +723,8 @@ def _note_several_activities(args: argparse.Namespace, entries: list[Any]) -> No
             f"({first_few(activities)}): each repetition is judged among every activity's "
             "cases; one per activity (posecbr train DATA --labels ACTIVITY --target "
             f"{args.target}, as compare --target {args.target} trains them) judges it among "
-            "its own: 80.1 % of held-out people's repetitions right against 76.2 % (README, "
-            '"A patient\'s session, repetition by repetition")'
+            "its own activity's cases only: expect more of a new person's repetitions judged "
+            'right (README, "A patient\'s session, repetition by repetition")'
         ),
     )
 
