@@ -144,8 +144,8 @@ MAX_FILLED_GAP_S = 0.1
 however often) is filled between its values either side, as finely as the running median
 (:data:`MEDIAN_S`) already reads it, and counts as followed there. Before, an angle had to be
 seen itself in half of the frames: with a third of the joints dropped at random in each
-frame, only the hips' height took part and the jumping jacks' arms, twists, knee raises and
-arm circles of CMU 13_29 counted none."""
+frame, only the hips' height took part and a recording's jumping jacks, twists, knee raises
+and arm circles counted none."""
 ALTERNATION_MIN = 0.5
 """A movement alternates sides (one repetition per side) only when what one side does at its
 far points and what the other does at its own are opposed by more than this cosine
@@ -158,8 +158,8 @@ TRUNK_SIDE_SHARE = 0.2
 its side-against-side direction (squared weights) takes its sides from the trunk: the way the
 shoulders turn or the trunk leans, as the fluents "torso twisted left" and "torso tilted left"
 read it (a twist, the arms turning with it; the limbs alone would name a side by which arm
-turns farther). In CMU subject 13's stretches the twists' trunk carried 0.25-0.41, knee raises
-and jogging at most 0.10."""
+turns farther). A twist's trunk carries well above this share, knee raises and jogging well
+below (docs/measurements.md, "Figures behind the code's rules: Counting repetitions")."""
 
 PELVIS_HEIGHT = "pelvis_height"
 """The hip centre's height above the floor, in trunk lengths (:func:`pelvis_height`)."""
@@ -187,8 +187,8 @@ read, so the line has no twin and takes no part in comparing the sides (:func:`_
 with both legs' lines compared, a side view's reverse lunge with a knee missing was taken for
 alternating on its trunk's wobble again, 5 repetitions for 1). The line folds the middle
 joint's bend and the limb's turn about its own axis into one direction, and so has no end
-nearer ease (:func:`_rest_is_high`; read with one, UI-PRMD's shoulder rotations with the
-elbow missing counted their rest plateaus, 7 of 6 and 6 of 5). A knee missing is placed
+nearer ease (:func:`_rest_is_high`; read with one, shoulder rotations with the elbow missing
+counted their rest plateaus too). A knee missing is placed
 where its hip and ankle fix it (:func:`_placed_knees`) and the leg's own angles are read:
 its line is read only when no knee is seen to measure the thigh and shank by."""
 ARM_RAISES: dict[str, tuple[str, tuple[str, str]]] = {
@@ -230,7 +230,8 @@ middle joint is missing, its line from root to end (:data:`LIMB_LINES`), and, fo
 whose hips are out of view, its angle from straight down (:data:`ARM_RAISES`). The limb plane angles
 are left out: a limb's projection on a plane it is nearly
 perpendicular to has no stable direction. The shank across the thigh (the thigh's turn) was
-tried and left out: it did no better on UI-PRMD's training subjects."""
+tried and left out: it did no better on the repetition benchmark's training subjects
+(``python -m benchmarks.repetitions``)."""
 TWIST_SINGULAR_COS = float(np.cos(np.radians(30.0)))
 """The frame attached to the upper arm is swung there from hanging straight down along the
 trunk; it has no stable orientation when the arm points within 30 degrees of straight up
@@ -251,8 +252,9 @@ JUMP_SHARE = 0.75
 """A pose model's glitch that outlasts the running median (:func:`_drop_glitches`) jumps
 away from the posture around it and back, each jump (from one sample to the next) carrying
 at least this share of its farthest: a movement gets there over several samples (a hurdle
-step's knee, straightening by 30 degrees a frame, 6 of UI-PRMD's Kinect repetitions counted
-7 with half)."""
+step's knee straightens by 30 degrees a frame; with half, a quick repetition's jump was taken
+for a glitch and a count came out one too many: docs/measurements.md, "Figures behind the code's
+rules: Counting repetitions")."""
 MAX_FILTER_FPS = 240.0
 """Above this frame rate the running median and the smoothing read every few frames, at
 240-480 fps: the median costs its width at every frame read, and 5 s at 4800 fps (a width
@@ -261,10 +263,9 @@ SUBSTANTIAL = 0.3
 """A far point counts when it stands out by at least this share of the median prominence of
 the candidates (a shallow repetition among deep ones still counts) and falls back by
 :data:`RETURN_SHARE` of its height on both sides: chosen together on joined single
-repetitions of UI-PRMD's training subjects s01-s04 only (``python -m benchmarks.repetitions``;
-MAE over Kinect and Vicon with the return rule at 0.4: 0.046 at 0.25 and 0.3, 0.3 counting
-more exactly, 0.051 at 0.4; without the rule 0.4 was best, 0.059), never on the held-out
-subjects, HDM05 or the hand counts."""
+repetitions of the repetition benchmark's training subjects only (``python -m
+benchmarks.repetitions``), never on its held-out subjects or any other recording
+(docs/measurements.md, "Figures behind the code's rules: Counting repetitions")."""
 RETURN_SHARE = 0.4
 """A far point counts only when the movement falls back from it, toward the far points
 before and after it, by at least this share of its height above rest (its prominence over
@@ -272,17 +273,18 @@ its height): a second far point reached after a shallow dip (a wobble at the bot
 lunge, a pause on the way up) is part of the same repetition. Rest is the lowest of the
 line from the far point before to the far point after, and within a period (:func:`_floors`;
 the clip's rest level, its lowest 5 %, when lower): before, the whole clip's rest, which a
-small swing held high (13_29's and 13_31's first arm circles) stood far above once wide
-swings reached lower; they were dropped, and a count went 3, 2 as the clip grew. Chosen with
-:data:`SUBSTANTIAL` on the training subjects only (at 0.3: MAE 0.063 without the rule, 0.046
-at 0.4, 0.051 at 0.5 and 0.6)."""
+small swing held high (a recording's first, small arm circles) stood far above once wide
+swings reached lower; they were dropped, and a count went down as the clip grew. Chosen with
+:data:`SUBSTANTIAL` on the training subjects only (docs/measurements.md, "Figures behind the
+code's rules: Counting repetitions")."""
 STILL_SHARE = 0.1
 """A far point is a still stretch, not a repetition, when the movement line as recorded (not
 about its running mean) rises less than this share of the median far point's rise above the
 lowest of the line within a period of it: the middle of a long rest between repetitions rises
 by nothing but noise. Far below :data:`SUBSTANTIAL`: a shallow repetition among deep ones
-rises little (the shallowest of the training subjects' joined clips, an incorrect side lunge
-of s04 in UI-PRMD Kinect, 0.24 of the median; at 0.3 it was dropped)."""
+rises little (the shallowest of the repetition benchmark's training repetitions rose less
+than 0.3 of the median and was dropped at 0.3: docs/measurements.md, "Figures behind the code's
+rules: Counting repetitions")."""
 
 HOLD_SHARE = RETURN_SHARE
 """Two neighbouring far points are one (:func:`_one_hold`) when the movement as recorded
@@ -301,20 +303,14 @@ LEAVE_SHARE = 0.1
 first sample after its peak, at which the movement line lies within this share of the peak's
 height above the low point (before the first peak, after the last): where the movement leaves
 and returns to rest, not at the low point itself, which in a flat, noisy rest lies anywhere
-in it (UI-PRMD's single repetitions, 2-3 s with some standing at each end, started at their
-clip's first frame and ended at its last in the median; now 0.40 s in and 0.37 s before the
-end on Kinect, 0.33 s and 0.33 s on Vicon; 0.35 s and 0.31 s before the end since a whole
-clip's one repetition is no longer bounded by a period: 97 of s01-s04's 758 on Kinect, 20 of
-384 on Vicon, most of them sit-to-stands, had been cut at a wobble at the bottom of the
-movement, median 1.1-1.2 s long, now 2.4-2.5 s, down and up). Chosen on UI-PRMD's training
-subjects s01-s04 only: on their joined repetitions (the benchmark's, ``python -m
-benchmarks.repetitions``, Kinect and Vicon, counted exactly: 1,327 cuts between two takes),
-the same rule applied on
-both sides of each cut crossed the cut the dataset's authors made in the standing between
-the takes at 21 % of cuts with 0.02, 7.6 % with 0.05, 2.9 % with 0.1, 1.7 % with 0.15, 1.1 %
-with 0.2 (85 % at the low point itself); 0.1 is past the knee and keeps the most of the
-movement (of a lone sin-squared excursion it leaves out a tenth of its time at each end).
-Never chosen on the held-out subjects, HDM05, CMU or the videos."""
+in it (single repetitions with some standing at each end started at their clip's first
+frame and ended at its last). Chosen on the repetition benchmark's training subjects only
+(``python -m benchmarks.repetitions``), on their joined repetitions: the same rule applied on
+both sides of each cut between two takes crossed the cut, made in the standing between the
+takes, less often the larger the share, steeply up to 0.1 and little after; 0.1 is past the
+knee and keeps the most of the movement (of a lone sin-squared excursion it leaves out a
+tenth of its time at each end). Never chosen on the held-out subjects or any other
+recording (docs/measurements.md, "Figures behind the code's rules: Counting repetitions")."""
 
 EASE_SHARE = 0.5
 """The posture at ease tells which end of a movement is rest only when the angles that have
@@ -329,12 +325,11 @@ the next, so one reached at three quarters as the line got there (counted) came 
 short as the line turned back from it 0.25 s later (not counted) and was whole 0.25 s after
 that (counted): a count going 2, 3, 2, 3 as the clip grew. A far point the line has turned
 at is as far as it will get, and half as far as the whole ones leaves the waver no hold. On
-the joined recordings of UI-PRMD's training subjects s01-s04 (``python -m
-benchmarks.repetition_growth``, their rows only; with the running median cut at the
-clip's ends, :func:`_running_median`) the count went down at 0.79 % of 0.25-s steps with
-three quarters and 0.46 % with a half, the two values tried (1.05 % before either change);
-never chosen on the held-out subjects, HDM05, CMU or
-the videos."""
+the joined recordings of the repetition benchmark's training subjects (``python -m
+benchmarks.repetition_growth``, their rows only; with the running median cut at the clip's
+ends, :func:`_running_median`) the count went down at fewer 0.25-s steps with a half than
+with three quarters, the two values tried; never chosen on the held-out subjects or any
+other recording (docs/measurements.md, "Figures behind the code's rules: Counting repetitions")."""
 ENDS_S = MIN_PERIOD_S / 2
 """Otherwise the rest end is the one the clip's first and last this many seconds lie nearer
 (0.2 s: half the shortest repetition, so the ends do not reach into its far point, as 5 % of
@@ -423,9 +418,8 @@ class RepetitionCount:
         """The period to tell a user: ``period_s`` when at least two repetitions were
         counted, else None (a period read from a wobble or the pose model's jitter in a
         posture held is not the period of anything repeated: ``reps`` said "0 repetitions
-        (period 0.40 s)"; nor is one beside a lone repetition, which repeats nothing: the
-        bundled slow reverse lunge, one repetition of 0.20-6.04 s, read "1 repetition
-        (period 0.44 s)")."""
+        (period 0.40 s)"; nor is one beside a lone repetition, which repeats nothing: a slow
+        lunge, one repetition of 6 s, was given the period of its wobble)."""
         return self.period_s if self.count >= 2 else None
 
     def to_dict(self) -> dict[str, Any]:
@@ -771,13 +765,13 @@ def median_width(rate: float, estimated: bool) -> int:
     at least three below :func:`glitch_free_fps`, the fewest that drop a glitch of one frame
     (rounded, 0.2 s was one sample below 7.5 fps: no median, the glitches left in). Below
     10 fps three samples also drop the far point of the quickest repetitions, held for less
-    than two (``reps``, ``segment`` and ``watch`` say so). Every k-th frame kept (four
-    phases), the 8 hand-counted bundled videos were counted exactly in 78 % of their copies
-    at 6 fps and 72 % at 5, now 88 and 86 % (100 % at 15 fps, 89 % at 8, as before).
-    Recordings without confidences (motion capture) keep the rounded width: with none at
-    7.5-10 fps the 28 mocap clips of known count of the repetition tests went 86 -> 94 %
-    at 8 fps, but the benchmark's held-out Kinect recordings, whose pose model glitches
-    though their files carry no confidences, 96.9 -> 94.4 % at 7.5 fps."""
+    than two (``reps``, ``segment`` and ``watch`` say so). Every k-th frame of videos of
+    known count kept, more copies at 5-6 fps were counted exactly with three than with the
+    rounded width. Recordings without confidences (motion capture) keep the rounded width:
+    with none at 7.5-10 fps, mocap clips were counted better at 8 fps but a depth camera's
+    recordings, whose pose model glitches though their files carry no confidences, worse
+    (docs/measurements.md, "Figures behind the code's rules: Repetitions counted below 10
+    fps")."""
     if estimated and rate < glitch_free_fps() - 1e-9:
         return 3
     return max(1, int(round(MEDIAN_S * rate)) | 1)
@@ -789,8 +783,9 @@ def _running_median(x: np.ndarray, width: int) -> np.ndarray:
     none made up. Padded with the edge sample (scipy's ``nearest``), the last sample's window
     held more copies of it than of anything else, so a pose model's glitch in the clip's last
     frame or two stood as a posture (a far point cut off by the end, counted, and gone a frame
-    later when the median read past it; a Kinect knee bent 50 degrees for three frames made
-    a count of UI-PRMD go 4, 5, 4); mirrored, a glitch just before the end is read twice. At
+    later when the median read past it; a knee the pose model bent for three frames made a
+    count go up and back down as the clip grew); mirrored, a glitch just before the end is
+    read twice. At
     30 fps (width 7) a glitch in the last frame is now gone and one in the last two halved.
 
     Column by column: SciPy's one-dimensional running median keeps its window sorted from
@@ -880,8 +875,8 @@ def _seen_spans(
 ) -> list[tuple[int, int]]:
     """Each repetition's span ``[a, b)`` cut to the stretch seen around its far point (the
     far points are seen, :func:`_in_view`): a repetition next to a stretch with nobody seen
-    starts where the person is first seen, not where the held posture began (13_30 with its
-    first 10 s blank: a repetition from 4.5 s, far point 10.0 s)."""
+    starts where the person is first seen, not where the held posture began (with a
+    recording's first seconds blank, its first repetition started seconds into the blank)."""
     if blind is None:
         return spans
     out = []
@@ -1361,7 +1356,7 @@ def _sides(
 
     Compared between the two sides' far points, not within one: in a jog both legs and arms
     move at every step, and a person whose right arm swings wider makes every step look
-    right-sided (13_30's steps were right, right, right, right, left, ...); what changes
+    right-sided (a jog's steps were named right but one in five); what changes
     between a left step and a right one is which side leads."""
     trunk = np.array([n in _LATERAL for n in names])
     if float(direction[trunk] @ direction[trunk]) >= TRUNK_SIDE_SHARE:
@@ -1665,7 +1660,7 @@ def _periodic_direction(
     """The period, its autocorrelation and the movement direction ``(C,)`` of ``x`` ``(n, C)``
     with every angle weighted by its periodic energy rather than its variance: its deviations
     scaled by the square root of :func:`periodic_share` at the ``period`` first found, so
-    that an angle that jitters (a Kinect joint barely moving) or changes once does not pull
+    that an angle that jitters (a tracked joint barely moving) or changes once does not pull
     the period or the direction. The direction is mapped back to the angles unweighted, so
     that the movement keeps its size in radians.
 
@@ -1676,15 +1671,17 @@ def _periodic_direction(
     and comes back (:func:`_out_and_back`) along the angles' own direction (unweighted,
     :func:`movement_direction`) farther than along the weighted one by at least
     :data:`MIN_EXCURSION_RAD` (the weighting left out as much movement as a repetition
-    needs), that direction is the movement's, with the first period: in ``segment``'s
-    stretch of the bundled side-lying leg raises (1.72 s to the end), too short for their
-    5.5-s period to show, the period first found, 1.76 s (autocorrelation 0.006), gave the
-    raised leg no weight and the arm under the head all, and the leg's two raises counted 1.
+    needs), that direction is the movement's, with the first period: in a ``segment``
+    stretch of side-lying leg raises too short for their period to show, the period first
+    found (its autocorrelation near 0) gave the raised leg no weight and the arm under the
+    head all, and the leg's two raises counted 1 (docs/measurements.md, "Figures behind the
+    code's rules: Counting repetitions").
     Out and back, not the range: the arms bent once to start jogging range farther than the
     legs' steps but do not come back; a held side plank's wobble goes about as far either
     way. Not for the windows ``segment`` classifies (:func:`cbr.segmentation.periods_in_span`):
-    read so, they moved, and CMU 13_31 segmented from 13_29 and 13_30 lost its second Twist
-    and called the end of its Jog unknown (hunt 37a); nor for ``reps`` of a whole clip."""
+    read so, they moved, and a recording segmented by a case base of the same person's
+    others lost a stretch and called the end of another unknown (hunt 37a); nor for ``reps``
+    of a whole clip."""
     v = np.diff(x, axis=0)
     w = np.sqrt(periodic_share(v, period, fps))
     weighted = x.mean(axis=0) + (x - x.mean(axis=0)) * w
@@ -1726,8 +1723,9 @@ def _above_rest(line: np.ndarray, far: np.ndarray, reach: int, held: bool = True
     level; a still stretch at rest is a hold at its own low level, and stays out. Before,
     the squat held 12 s was taken for rest and not counted. ``held`` False: within ``reach``
     of the far point itself, as before, for the windows segmentation classifies
-    (:func:`count_in_signals`' ``clear_alternation``): read so, ``watch``'s windows of CMU
-    13_31 moved and its blocks right fell from 92.5 to 86.9 % (``benchmarks.segment_live``)."""
+    (:func:`count_in_signals`' ``clear_alternation``): read so, ``watch``'s windows moved
+    and fewer of a streamed recording's blocks came out right (``benchmarks.segment_live``;
+    docs/measurements.md, "Figures behind the code's rules: Counting repetitions")."""
     if not len(far):
         return np.zeros(0, dtype=bool)
     height = _rises(line, far, reach, held)
@@ -1780,7 +1778,7 @@ def _posture_stays_out(line: np.ndarray, x: np.ndarray, p: int, q: int, since: i
     both, the pair is one excursion of the whole posture, however far the line dipped (a
     front kick: the knee bends to lift the leg, straightens half for the kick and bends
     again to bring it back while the hip stays raised; read along the knee alone, two
-    repetitions: HDM05 bd's six kicks counted 6, 5, 3 at 4.5, 4.75 and 5 s, 3 by hand).
+    repetitions, and a count that wavered as the clip grew).
     ``x`` is weighted as :data:`HOLD_SHARE` says, so that an angle changed once (an arm held
     otherwise in the next take) is no excursion; rest is sought before the pair, not
     anywhere within a period, so that small swings held high before wide ones keep their
@@ -1906,15 +1904,17 @@ def _sides_mirror(
 
     About the running mean, however clearly the movement repeats: a one-off change of
     posture is not what repeats (bending the arms once to start jogging; the end of a twist
-    before a jog, in a stretch of CMU 13_31 that starts 0.7 s early: that bit of twist
-    lowered the autocorrelation below :data:`CLEAR_PERIODICITY`, where the running mean used
-    to be dropped, and as recorded the steps' postures were opposed by a cosine of -0.46,
-    short of -0.5: 3 repetitions, not alternating, for 7 steps). As recorded as well: about
+    before a jog, in a stretch that starts a little early: that bit of twist lowered the
+    autocorrelation below :data:`CLEAR_PERIODICITY`, where the running mean used to be
+    dropped, and as recorded the steps' postures were opposed by a cosine just short of
+    -0.5: the steps counted as repetitions of one side, too few and not alternating). As
+    recorded as well: about
     its running mean any movement that goes out and back is opposed to itself (a one-arm
     raise: up against down), as recorded a raised arm and the arm at rest are not (cosine
-    above 0), while a person who stands a little turned leaves a jog's steps opposed, if less
-    (13_31: -0.28). Below 0 is "opposed at all", not a value fitted to data: on UI-PRMD's
-    training subjects s01-s04 any bound from -0.25 to 0.25 counts the same."""
+    above 0), while a person who stands a little turned leaves a jog's steps opposed, if less.
+    Below 0 is "opposed at all", not a value fitted to data: on the repetition benchmark's
+    training subjects any bound near 0 counts the same (docs/measurements.md, "Figures behind
+    the code's rules: Counting repetitions")."""
 
     def cosine(a: np.ndarray, b: np.ndarray) -> float:
         norm = float(np.linalg.norm(a) * np.linalg.norm(b))
