@@ -929,8 +929,9 @@ class LiveSegmenter:
         from the start to the end of the first of ``after`` are counted as one stretch, and
         the far point they keep cut off at the start, lying in the first segment, counts
         there (:func:`cbr.segmentation.cut_off_beside`). Before, dropped: ``watch`` finished
-        the first segment before it saw the next, and the bundled glute bridge, held as the
-        stream starts, counted 0 there where ``segment`` and the hand count 1."""
+        the first segment before it saw the next, and a glute bridge held as the stream
+        starts counted none there where ``segment`` and a count by hand found one
+        (docs/measurements.md, "Figures behind the code's rules: watch against segment")."""
         held, self.waiting = self.waiting, None
         assert held is not None
         segment, end = held.segment, held.segment.end_frame
@@ -1098,9 +1099,9 @@ class LiveSegmenter:
         it is most clearly (the least ratio), solved again from its frames, or when none of
         them is nearest to it (a segment the decoders' evidence around it gave, a hop or two
         long), by the one that lies least far from it, as ``segment`` tells such a segment by
-        one of its windows (:func:`cbr.segmentation._explain_segment`). Before, "": the
-        bundled squat clip after 3 s of nobody, each frame twice at 10 fps, had a KneeRaise
-        segment of frames 100-105 explained by nothing."""
+        one of its windows (:func:`cbr.segmentation._explain_segment`). Before, "": a squat
+        streamed after seconds of nobody had a short segment of another activity explained by
+        nothing (docs/measurements.md, "Figures behind the code's rules: watch against segment")."""
         inside = [w for w in self.judged if start <= w.centre < end]
         inside = inside or [w for w in self.judged if w.start < end and w.stop > start]
         if not inside:
@@ -1411,9 +1412,10 @@ class LiveSegmenter:
         point got into and held is no repetition
         (:func:`features.repetitions.count_in_signals`' ``settled``), as
         :func:`cbr.segmentation.counted_segments` counts a segment after one with none.
-        Before, counted: the bundled side plank, its label changing before the plank is got
-        into, counted 1 in ``watch``'s segment after the change, 0 in ``segment``'s and by
-        ``reps``. Other ``reps`` as they are."""
+        Before, counted: a side plank whose label changes before the plank is got into
+        counted a repetition in ``watch``'s segment after the change, none in ``segment``'s
+        and by ``reps`` (docs/measurements.md, "Figures behind the code's rules: watch
+        against segment"). Other ``reps`` as they are."""
         prior = self.last_cut
         if len(reps) != 1 or first != start or prior is None or prior.bounds[1] != start:
             return reps
@@ -1636,8 +1638,9 @@ class LiveSegmenter:
         posture got into and held: the stream frames from the first repetition of the
         segment that held it (:attr:`held_from`, while kept) to the end, counted as one
         stretch, hold none, as :func:`cbr.segmentation.counted_segments` judges it
-        (:func:`cbr.segmentation._held_into_the_end`: the bundled side plank, cut in its
-        hold, counted 1 where the stream as a whole counts 0)."""
+        (:func:`cbr.segmentation._held_into_the_end`: a side plank cut in its hold counted a
+        repetition where the stream as a whole counts none; docs/measurements.md, "Figures
+        behind the code's rules: A posture held across a cut")."""
         if not (last and self.holding and kept) or self.held_from < self.offset:
             return kept
         try:

@@ -113,9 +113,9 @@ class Label(str):
 @functools.lru_cache(maxsize=256)
 def _lines(text: str, size: int, room: int) -> tuple[tuple[str, int], ...]:
     """``text`` as lines of at most ``room`` pixels, each with its font size: whole when it
-    fits at ``size``; else broken after spaces, underscores and hyphens (UI-PRMD's
-    "standing_shoulder_internal_external_rotation", 44 letters, ran past the right edge of
-    frames narrower than about 260 pixels); a piece still too wide is written smaller (down
+    fits at ``size``; else broken after spaces, underscores and hyphens (an activity named in
+    44 letters joined by underscores ran past the right edge of frames narrower than about
+    260 pixels); a piece still too wide is written smaller (down
     to :data:`_SMALLEST` pixels), and cut short with "…" when even that is too wide."""
     if _width(text, size) <= room:
         return ((text, size),)

@@ -128,11 +128,11 @@ def person_jumps(image_lm: np.ndarray, fps: float) -> list[int]:
     :data:`JUMP_TORSOS_PER_S` a second), both frames showing the person. A frame after
     frames with nobody in view is none: who comes back into view after a gap is not judged,
     nor a cut between two people in one spot. Body proportions from the world landmarks do
-    not tell people apart (hunt 39g, the bundled videos: bone-length ratios averaged over
-    0.5 s differ between people by less, at the 10th percentile, than within one person at
-    the 99th; BlazePose fits much the same body to everyone). Nor does clothing colour
-    (hunt 39i: median Lab colour of torso and thigh patches over 0.5 s varies up to 21 within
-    one person, as lighting and pose change, and three people wear black)."""
+    not tell people apart (hunt 39g: bone-length ratios differ between people by less than
+    within one person, the pose model fitting much the same body to everyone). Nor does
+    clothing colour (hunt 39i: it varies within one person as lighting and pose change, and
+    different people wear the same colour; docs/measurements.md, "Figures behind the code's
+    rules: Telling people apart")."""
     xy = np.asarray(image_lm, dtype=float)[:, :, :2]
     if len(xy) < 2:
         return []
