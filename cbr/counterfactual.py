@@ -182,7 +182,9 @@ class _Vectors:
     """Exact search for vector problems under (weighted) euclidean distance: the squared
     distance of every case to the problem with feature f copied from the guide is the current
     one plus ``delta[:, f]``, so the vote after each possible change is computed for all
-    features at once (the classifier's own vote, :func:`cbr.reuse.vote`)."""
+    features of every kept set at once, one vote a step (the classifier's own vote,
+    :func:`cbr.reuse.vote`; each candidate's k nearest cases chosen alone, as the vote of
+    that problem chooses them)."""
 
     def __init__(
         self, cb: CaseBase, view: View, q: np.ndarray, k: int, weights: Weights, balanced: bool
@@ -194,35 +196,39 @@ class _Vectors:
         shift = np.zeros(D) if centre is None else np.asarray(centre, dtype=np.float64)
         self.C = cb.problems - shift
         self.q = q - shift
-        self.view, self.k, self.weights = view, min(int(k), len(cb)), weights
+        self.k, self.weights = min(int(k), len(cb)), weights
         self.classes, self.codes = np.unique(cb.labels.astype(str), return_inverse=True)
         self.balance = class_balance(cb.labels, self.classes) if balanced else None
         self.d2 = np.asarray(((self.C - self.q) ** 2) @ w, dtype=np.float64)
-        # one column per feature: a weighted indicator of the view's columns, so a feature's
-        # sum over columns is one matrix product
-        cols = view.columns
-        self.w = w[cols]
-        self.Cw = self.C[:, cols] * self.w
-        self.member = np.zeros((len(cols), len(view.features)))
-        self.member[np.arange(len(cols)), view.feature] = 1.0
+        # the view's columns grouped by feature (every feature has one at least), so a
+        # feature's sum over its columns is a run of np.add.reduceat: no matrix product with
+        # a feature indicator, whose BLAS threads cost more than its arithmetic at this size
+        order = np.argsort(view.feature, kind="stable")
+        self.cols = view.columns[order]
+        self.starts = np.searchsorted(view.feature[order], np.arange(len(view.features)))
+        self.w = w[self.cols]
+        self.Cw = self.C[:, self.cols] * self.w
 
     def deltas(self, guide: int) -> np.ndarray:
         """``(n, n_features)``: the change of every case's squared distance when the
         problem's feature f takes the values of case ``guide``:
         ``sum_j w_j [(g_j - c_j)^2 - (q_j - c_j)^2] = sum_j w_j (g_j - q_j)(g_j + q_j - 2 c_j)``
         over the feature's columns j."""
-        cols = self.view.columns
-        g, q = self.C[guide, cols], self.q[cols]
-        a = (self.w * (g**2 - q**2)) @ self.member
-        return np.asarray(a[None, :] - 2.0 * (self.Cw @ ((g - q)[:, None] * self.member)))
+        g, q = self.C[guide, self.cols], self.q[self.cols]
+        a = np.add.reduceat(self.w * (g**2 - q**2), self.starts)
+        return np.asarray(
+            a[None, :] - 2.0 * np.add.reduceat(self.Cw * (g - q), self.starts, axis=1)
+        )
 
     def margins(self, d2: np.ndarray, target: int) -> np.ndarray:
         """For squared distances ``(n, F)`` (one column per candidate problem), the target's
         vote share minus the best other share ``(F,)``."""
         k = self.k
-        top = np.argpartition(d2, k - 1, axis=0)[:k] if k < len(d2) else np.argsort(d2, axis=0)
-        d = np.sqrt(np.maximum(np.take_along_axis(d2, top, axis=0), 0.0)).T
-        proba = vote(d, self.codes[top].T, len(self.classes), self.weights, self.balance)
+        rows = np.ascontiguousarray(d2.T)  # one candidate a row: each selection runs in place
+        top = (np.argpartition(rows, k - 1, axis=1)[:, :k] if k < len(d2)
+               else np.argsort(rows, axis=1))  # fmt: skip
+        d = np.sqrt(np.maximum(np.take_along_axis(rows, top, axis=1), 0.0))
+        proba = vote(d, self.codes[top], len(self.classes), self.weights, self.balance)
         others = np.delete(proba, target, axis=1).max(axis=1)
         return np.asarray(proba[:, target] - others, dtype=np.float64)
 
@@ -236,24 +242,29 @@ class _Vectors:
         target = int(np.searchsorted(self.classes, label))
         other = self.codes != target
         delta = self.deltas(guide)
+        n, n_features = delta.shape
         beam: list[tuple[tuple[int, ...], np.ndarray]] = [((), self.d2)]
         for _ in range(MAX_CHANGES):
-            scored: dict[frozenset[int], tuple[float, float, tuple[int, ...], np.ndarray]] = {}
-            for chosen, d2 in beam:
-                cand = d2[:, None] + delta
-                m = self.margins(cand, target)
-                rivals = np.sort(cand[other], axis=0)[: self.k].mean(axis=0)
-                gap = cand[guide] - rivals
-                for f in np.argsort(-m, kind="stable")[: 4 * BEAM].tolist():
+            # every kept set's extensions at once: column b * n_features + f is set b with f
+            cand = np.stack([d2 for _, d2 in beam], axis=1)[:, :, None] + delta[:, None, :]
+            cand = cand.reshape(n, -1)
+            m = self.margins(cand, target).reshape(len(beam), n_features)
+            rivals = np.sort(cand[other], axis=0)[: self.k].mean(axis=0)
+            gap = (cand[guide] - rivals).reshape(len(beam), n_features)
+            best = np.argsort(-m, axis=1, kind="stable")[:, : 4 * BEAM].tolist()
+            scored: dict[frozenset[int], tuple[float, float, tuple[int, ...], int]] = {}
+            for b, (chosen, _) in enumerate(beam):
+                for f in best[b]:
                     key = frozenset((*chosen, f))
                     if f in chosen or key in scored:
                         continue
-                    scored[key] = (float(m[f]), float(gap[f]), (*chosen, f), cand[:, f])
+                    scored[key] = (float(m[b, f]), float(gap[b, f]), (*chosen, f),
+                                   b * n_features + f)  # fmt: skip
             ranked = sorted(scored.values(), key=lambda t: (-t[0], t[1]))[:BEAM]
-            beam = [(c, d2) for _, _, c, d2 in ranked]
-            winner = next(((c, d2) for c, d2 in beam if self._wins(d2, target)), None)
+            beam = [(c, cand[:, j]) for _, _, c, j in ranked]
+            winner = next((i for i, t in enumerate(ranked) if _won(t[0], target)), None)
             if winner is not None:
-                return self._undo(list(winner[0]), winner[1], delta, target)
+                return self._undo(list(beam[winner][0]), beam[winner][1], delta, target)
         return None
 
     def _undo(self, chosen: list[int], d2: np.ndarray, delta: np.ndarray, target: int) -> list[int]:
@@ -265,9 +276,13 @@ class _Vectors:
         return chosen
 
     def _wins(self, d2: np.ndarray, target: int) -> bool:
-        m = self.margins(d2[:, None], target)[0]
-        # a tie goes to the first class in order
-        return bool(m > 0 or (m == 0 and target == 0))
+        return _won(float(self.margins(d2[:, None], target)[0]), target)
+
+
+def _won(margin: float, target: int) -> bool:
+    """Whether the ``target`` class wins a vote by ``margin`` (its share minus the best other
+    one): a tie goes to the first class in order."""
+    return margin > 0 or (margin == 0 and target == 0)
 
 
 def counterfactual(

@@ -18,13 +18,17 @@ is read once.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+import cbr.counterfactual as cfm
+from cbr.casebase import CaseBase
 from cbr.estimator import CaseBaseClassifier
+from cbr.profiles import view_of
 from features.datasets import load_dataset
 
 TRAIN = ["s01", "s02", "s03", "s04", "s05"]
@@ -118,3 +122,135 @@ def test_real_explanation_names_fluents(
     matched = {m.removesuffix(" (at times)") for m in exp.matched}
     assert matched and matched <= words
     assert knees & (matched | set(exp.not_seen))
+
+
+# The counterfactual search of vector problems, fast and the same (session 52): its beam
+# search follows the classifier's vote over every candidate change (the problem with one
+# feature's values taken from a guide case). A plain search builds every candidate problem
+# and measures it against every case, as written below, and must find the very changes the
+# fast search finds (which adds per-feature changes of the squared distances); each step of
+# the fast search votes once over every candidate of every kept set. On the fitted case base
+# cut to two movements; a query is one of its cases, its clip's cases left out.
+
+K = 5  # the fitted classifier's k
+MOVEMENTS = ("deep_squat", "sit_to_stand")
+
+
+class _Plain:
+    """Candidate problems of query ``q`` toward ``label`` with guide ``guide``'s values, each
+    built and compared with every case (weighted squared distance), its k nearest cases
+    voting 1/distance."""
+
+    def __init__(self, cb: CaseBase, q: np.ndarray, guide: int, label: str) -> None:
+        self.cb, self.q, self.guide, self.label = cb, q, guide, label
+        self.view = view_of(cb)
+        mult = cb.measure.multiplier
+        self.w = np.ones(cb.problems.shape[1]) if mult is None else np.asarray(mult) ** 2
+        self.labels = cb.labels.astype(str)
+        self.classes = sorted(set(self.labels))
+        self.target = self.classes.index(label)
+
+    def changed(self, chosen: tuple[int, ...]) -> np.ndarray:
+        p = self.q.copy()
+        for f in chosen:
+            cols = self.view.columns[self.view.feature == f]
+            p[cols] = self.cb.problems[self.guide, cols]
+        return p
+
+    def margin_gap(self, chosen: tuple[int, ...]) -> tuple[float, float]:
+        """The label's vote share minus the best other one; the guide's squared distance
+        minus the mean of the k nearest cases of other labels."""
+        d2 = ((self.cb.problems - self.changed(chosen)) ** 2 * self.w).sum(axis=1)
+        share = np.zeros(len(self.classes))
+        for i in np.argsort(d2)[:K]:
+            share[self.classes.index(self.labels[i])] += 1.0 / np.sqrt(d2[i])
+        share /= share.sum()
+        rivals = np.sort(d2[self.labels != self.label])[:K].mean()
+        margin = share[self.target] - np.delete(share, self.target).max()
+        return float(margin), float(d2[self.guide] - rivals)
+
+    def wins(self, chosen: tuple[int, ...]) -> bool:
+        m = self.margin_gap(chosen)[0]
+        return m > 0 or (m == 0 and self.target == 0)  # a tie: the first class
+
+
+def _plain(cb: CaseBase, q: np.ndarray, guide: int, label: str) -> list[int] | None:
+    """The beam search written plainly (:class:`_Plain`): extensions of every kept set by
+    one feature ranked by margin, then by gap; the first size at which the label wins is
+    kept, and every change it wins without undone (the last first)."""
+    plain = _Plain(cb, q, guide, label)
+    n_features = len(plain.view.features)
+    assert n_features <= 4 * cfm.BEAM  # every feature is a candidate at every step
+    beam: list[tuple[int, ...]] = [()]
+    for _ in range(cfm.MAX_CHANGES):
+        scored: dict[frozenset[int], tuple[float, float, tuple[int, ...]]] = {}
+        for chosen in beam:
+            got = {f: plain.margin_gap((*chosen, f)) for f in range(n_features) if f not in chosen}
+            for f in sorted(got, key=lambda f: -got[f][0]):  # stable: ties keep feature order
+                scored.setdefault(frozenset((*chosen, f)), (*got[f], (*chosen, f)))
+        ranked = sorted(scored.values(), key=lambda t: (-t[0], t[1]))[: cfm.BEAM]
+        beam = [c for _, _, c in ranked]
+        won = [c for c in beam if plain.wins(c)]
+        if won:
+            chosen = won[0]
+            for f in reversed(won[0]):
+                rest = tuple(c for c in chosen if c != f)
+                if rest and plain.wins(rest):
+                    chosen = rest
+            return list(chosen)
+    return None
+
+
+@pytest.fixture(scope="module")
+def two_movements(fitted: Callable[[str, str], CaseBaseClassifier]) -> CaseBase:
+    """The fitted UI-PRMD case base's cases of :data:`MOVEMENTS` (its measure and weights)."""
+    cb = fitted("fluents", "euclidean").case_base_
+    keep = np.flatnonzero(np.isin(cb.labels.astype(str), MOVEMENTS))
+    return _subset(cb, keep)
+
+
+def _subset(cb: CaseBase, keep: np.ndarray) -> CaseBase:
+    return replace(cb, problems=cb.problems[keep], labels=cb.labels[keep],
+                   sources=tuple(cb.sources[i] for i in keep), ids=None, subjects=(), origins=(),
+                   frames=(), skeletons=(), poses=(), reps=None, _index=None, cache={})  # fmt: skip
+
+
+def _query(cb: CaseBase, i: int) -> tuple[CaseBase, np.ndarray, str]:
+    """Case ``i``'s problem, the case base without its clip's cases, and the other label."""
+    rest = np.flatnonzero(np.asarray(cb.sources) != cb.sources[i])
+    other = next(m for m in MOVEMENTS if m != str(cb.labels[i]))
+    return _subset(cb, rest), np.array(cb.problems[i]), other
+
+
+@pytest.mark.parametrize("i", [7, 21, 91])  # searches of one to three steps: cheap to check
+def test_the_fast_counterfactual_search_finds_what_the_plain_search_finds(
+    two_movements: CaseBase, i: int
+) -> None:
+    cb, q, label = _query(two_movements, i)
+    fast = cfm._Vectors(cb, view_of(cb), q, K, "distance", False)
+    guides, _ = cfm._nearest(cb, q, label, 3)
+    found = [fast.search(g, label) for g in guides]
+    assert found == [_plain(cb, q, g, label) for g in guides]
+    assert any(f is not None for f in found)  # a search that finds nothing proves little
+
+
+def test_each_step_of_the_counterfactual_search_votes_once(
+    two_movements: CaseBase, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    cb, q, label = _query(two_movements, 21)
+    fast = cfm._Vectors(cb, view_of(cb), q, K, "distance", False)
+    (guide,), _ = cfm._nearest(cb, q, label, 1)
+    calls: list[int] = []
+    vote = cfm.vote
+
+    def counted(d: np.ndarray, *args: object) -> np.ndarray:
+        calls.append(len(d))
+        return vote(d, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(cfm, "vote", counted)
+    found = fast.search(guide, label)
+    assert found is not None and len(found) >= 2  # two steps at least
+    steps = [n for n in calls if n > 1]  # a step's vote: every candidate of every kept set
+    assert len(steps) <= cfm.MAX_CHANGES
+    # then one vote per change tried away (a winner of s changes: at most s)
+    assert len(calls) - len(steps) <= len(steps)
