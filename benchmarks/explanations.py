@@ -10,6 +10,8 @@ per dataset:
   changed clip's distance to its nearest case of that label over that label's usual
   nearest-case distance; Native Guide, Delaney et al. 2021);
 - the default text's **length** (lines and characters per clip);
+- the **time** of an explanation (``explain_ms``: milliseconds per clip of
+  ``explain_solved``, the counterfactual search most of it; median and maximum);
 - **contradictions** found by :func:`cbr.consistency.contradictions` over every clip;
 - accuracy and the **expected calibration error** (ECE, 10 bins) of the confidences, with its
   bootstrap 95 % interval (clips resampled: what of it is noise at a few hundred clips) and
@@ -135,7 +137,9 @@ def explain_rows(
                          "confidence": one.solution.confidence,
                          "vote_share": one.solution.vote_share})  # fmt: skip
             continue
+        t0 = time.perf_counter()
         exp = clf.explain_solved(one, target)
+        ms = 1e3 * (time.perf_counter() - t0)
         c = exp.contrast
         found = contradictions(exp, clf.case_base_, one.problem)
         rows.append(
@@ -145,6 +149,7 @@ def explain_rows(
                 "plausibility": c.plausibility if c is not None and c.valid else None,
                 "chars": len(exp.text),
                 "lines": len(exp.text.splitlines()),
+                "explain_ms": ms,
                 "contradictions": found,
                 "right": one.solution.label == clip_target(clip, target),
                 "confidence": one.solution.confidence,
@@ -185,6 +190,8 @@ def summarise_rows(rows: list[dict[str, Any]], features: int) -> dict[str, Any]:
         "plausibility_median": float(np.median(plaus)) if plaus else float("nan"),
         "max_chars": max(r["chars"] for r in rows),
         "mean_chars": float(np.mean([r["chars"] for r in rows])),
+        "explain_ms_median": float(np.median([r["explain_ms"] for r in rows])),
+        "explain_ms_max": float(max(r["explain_ms"] for r in rows)),
         "max_lines": max(r["lines"] for r in rows),
         "contradictions": len(found),
         "contradiction_examples": found[:5],
@@ -378,7 +385,8 @@ def _fold_line(s: dict[str, Any]) -> str:
     return (f"    validity {100 * s['validity']:.1f} % with {s['mean_changes']:.2f} changes, "
             f"{s['contradictions']} contradictions, at most {s['max_lines']} lines and "
             f"{s['max_chars']} chars, accuracy {100 * s['accuracy']:.1f} %, ECE {s['ece']:.3f} "
-            f"[{lo:.3f}, {hi:.3f}]")  # fmt: skip
+            f"[{lo:.3f}, {hi:.3f}], {s['explain_ms_median']:.0f} ms an explanation "
+            "(median)")  # fmt: skip
 
 
 def _print_explanations(name: str, s: dict[str, Any]) -> None:
@@ -391,7 +399,8 @@ def _print_explanations(name: str, s: dict[str, Any]) -> None:
         f"{name:<28} {s['clips']:>5} {100 * s['validity']:8.1f} % {s['mean_changes']:8.2f} "
         f"{s['plausibility_median']:8.2f} {s['max_lines']:6d} {s['max_chars']:6d} "
         f"{s['mean_chars']:6.0f} {s['contradictions']:6d} {100 * s['accuracy']:6.1f} % "
-        f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(s)}"
+        f"{s['ece']:6.3f} [{lo:.3f}, {hi:.3f}] {_if_calibrated(s)} "
+        f"{s['explain_ms_median']:8.0f} {s['explain_ms_max']:8.0f}"
     )
 
 
@@ -429,7 +438,7 @@ def _header() -> None:
     print(
         f"\n{'dataset':<28} {'clips':>5} {'validity':>10} {'changes':>8} {'plausib.':>8} "
         f"{'lines':>6} {'chars':>6} {'mean':>6} {'contra':>6} {'acc':>8} {'ECE':>6} "
-        f"{'(95 % interval)':>16} {'if calibrated':>15}"
+        f"{'(95 % interval)':>16} {'if calibrated':>15} {'ms/expl.':>8} {'(max)':>8}"
     )
 
 
