@@ -261,6 +261,8 @@ class _Vectors:
                     scored[key] = (float(m[b, f]), float(gap[b, f]), (*chosen, f),
                                    b * n_features + f)  # fmt: skip
             ranked = sorted(scored.values(), key=lambda t: (-t[0], t[1]))[:BEAM]
+            if not ranked:  # every feature changed and the label does not win
+                return None
             beam = [(c, cand[:, j]) for _, _, c, j in ranked]
             winner = next((i for i, t in enumerate(ranked) if _won(t[0], target)), None)
             if winner is not None:
