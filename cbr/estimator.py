@@ -171,6 +171,45 @@ def check_labels(y: Any, n: int, name: str = "y") -> np.ndarray:
     return np.array([str(v) for v in y_arr], dtype=object)
 
 
+def _classes(y: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``y`` (:func:`check_labels`) as text labels ``(n,)`` and the classes in the caller's
+    type (sorted)."""
+    check_labels(y, n)
+    # the labels as scikit-learn reads them: in numpy's common type (1 and 2.0 are 1.0 and
+    # 2.0), so the cases' text labels are the text of the classes
+    values = np.asarray(y)
+    try:
+        classes = np.unique(values)
+    except TypeError:  # objects of kinds that do not sort together: compared as text
+        values = values.astype(str)
+        classes = np.unique(values)
+    return np.array([str(v) for v in values], dtype=object), classes
+
+
+def check_two_activities(labels: np.ndarray, name: str = "y") -> None:
+    """Refuse text ``labels`` (``name``: what the caller calls them) of one activity only:
+    a classifier needs two (:class:`features.errors.InputError`)."""
+    if len(np.unique(labels)) < 2:
+        raise InputError(
+            f"the training set has only one activity ({labels[0]!r}); a classifier needs "
+            "at least two",
+            name,
+        )
+
+
+def _check_someone(names: Sequence[str], nobody: Sequence[int]) -> None:
+    """Refuse the training clips at positions ``nobody`` (named ``names``), which show no
+    person."""
+    if nobody:
+        shown = ", ".join(names[i] for i in nobody[:5])
+        raise InputError(
+            f"{counted(len(nobody), 'training clip')} "
+            f"{'shows' if len(nobody) == 1 else 'show'} no person (no frame with a torso): "
+            f"{shown}{' ...' if len(nobody) > 5 else ''}",
+            "X",
+        )
+
+
 def _stack(values: Sequence[np.ndarray], cols: np.ndarray | None) -> np.ndarray:
     """``(n, ...)`` of the clips' problems, each cut to the columns ``cols`` (last axis; None:
     all), filled row by row: no second copy of the candidate columns."""
@@ -600,20 +639,26 @@ class CaseBaseClassifier(Classifier):
         handling and the weighting are chosen by leave-one-subject-out cross-validation inside
         the training clips (``selection_`` holds the scores); the test clips of an outer
         cross-validation never take part. Each clip is reduced to what the fit needs of it as
-        it is read (:mod:`cbr.described`): memory grows by kilobytes per clip. A clip
-        :meth:`solve` would refuse as too short (:func:`too_short`) is refused here (an
-        :class:`~features.errors.InputError` naming it) before any clip is described: no
-        case is made of what could not be classified (``cbr.training.train`` skips it, naming
-        it, as ``posecbr train`` does).
+        it is read (:mod:`cbr.described`): memory grows by kilobytes per clip. Bad labels
+        (:func:`check_labels`, one activity only), a clip that shows no person and one
+        :meth:`solve` would refuse as too short (:func:`too_short`) are refused (an
+        :class:`~features.errors.InputError` naming ``y`` or the clip) before any clip is
+        described: no case is made of what could not be classified (``cbr.training.train``
+        skips such a clip, naming it, as ``posecbr train`` does).
         """
         candidates, mirror, sides = self.describe_plan()
         seqs = as_sequences(X)
         if len(seqs) == 0:
             raise InputError("the training set is empty", "X")
-        for i, seq in enumerate(seqs):  # before the clips are described: as solve refuses it
+        # what the labels and the poses alone tell, refused before any clip is described
+        # (fit_described checks it again, of clips described elsewhere), in its order there
+        labels, _ = _classes(y, len(seqs))
+        _check_someone([s.source or f"X[{i}]" for i, s in enumerate(seqs)], unusable(seqs))
+        for i, seq in enumerate(seqs):  # as solve refuses it
             why = too_short(seq, "learn from")
             if why is not None:
                 raise InputError(why, seq.source or f"X[{i}]")
+        check_two_activities(labels)
         clips = progress(seqs, desc="features", total=len(seqs), unit="clip")
         return self.fit_described(list(describe_clips(clips, candidates, mirror, sides)), y)
 
@@ -682,34 +727,16 @@ class CaseBaseClassifier(Classifier):
         """The labels as text ``(n,)`` and the classes in the caller's type (sorted)."""
         if len(clips) == 0:
             raise InputError("the training set is empty", "X")
-        check_labels(y, len(clips))
-        # the labels as scikit-learn reads them: in numpy's common type (1 and 2.0 are 1.0 and
-        # 2.0), so the cases' text labels are the text of the classes
-        values = np.asarray(y)
-        try:
-            classes = np.unique(values)
-        except TypeError:  # objects of kinds that do not sort together: compared as text
-            values = values.astype(str)
-            classes = np.unique(values)
-        labels = np.array([str(v) for v in values], dtype=object)
-        bad = [i for i, c in enumerate(clips) if c.torso_share == 0.0]
-        if bad:
-            names = ", ".join(clips[i].source or f"X[{i}]" for i in bad[:5])
-            raise InputError(
-                f"{counted(len(bad), 'training clip')} {'shows' if len(bad) == 1 else 'show'} "
-                f"no person (no frame with a torso): {names}{' ...' if len(bad) > 5 else ''}",
-                "X",
-            )
+        labels, classes = _classes(y, len(clips))
+        _check_someone(
+            [c.source or f"X[{i}]" for i, c in enumerate(clips)],
+            [i for i, c in enumerate(clips) if c.torso_share == 0.0],
+        )
         for i, c in enumerate(clips):  # a case of it would answer what solve refuses to ask
             why = _shorter_than_a_movement(c.duration_s, None, "learn from")
             if why is not None:
                 raise InputError(why, c.source or f"X[{i}]")
-        if len(np.unique(labels)) < 2:
-            raise InputError(
-                f"the training set has only one activity ({labels[0]!r}); a classifier needs "
-                "at least two",
-                "y",
-            )
+        check_two_activities(labels)
         return labels, classes
 
     def _describe(self, clips: Sequence[DescribedClip]) -> _Described:
@@ -1252,6 +1279,7 @@ __all__ = [
     "Solved",
     "as_sequences",
     "check_labels",
+    "check_two_activities",
     "too_short",
     "unusable",
 ]

@@ -46,7 +46,7 @@ from features.text import counted, did_you_mean, spelt_as
 
 from .casebase import CaseBase, piece_name, subject_of
 from .described import DescribedClip, describe_case, describe_clip
-from .estimator import CaseBaseClassifier, as_sequences, check_labels
+from .estimator import CaseBaseClassifier, as_sequences, check_labels, check_two_activities
 from .estimator_protocol import check_fitted, unfitted_copy
 from .judges import JUDGES
 from .maintenance import MaintenanceReport, record_trim
@@ -359,15 +359,17 @@ def train(
     (``target``: the column's name, as ``train --target``). Clips that show no person, or
     last less than one movement can (which ``fit`` refuses), are skipped and named.
     ``clips`` that are not PoseSequences, an ``estimator`` that is not a
-    :class:`~cbr.estimator.CaseBaseClassifier`, a ``cases`` or ``target`` of another kind:
-    :class:`features.errors.InputError`, before any clip is read. ``cases`` records what
+    :class:`~cbr.estimator.CaseBaseClassifier`, a ``cases`` or ``target`` of another kind,
+    ``labels`` missing one or of one activity only: :class:`features.errors.InputError`,
+    before any clip is read. ``cases`` records what
     the clips are, it cuts nothing: :func:`cut` and :func:`cut_recording` cut them as
     ``train --split`` does (windows for ``segment`` and ``watch``)."""
     check_url_or_path(db, "db")  # None made a case base file "None", after the fit
     _check_name(name)
     clips = as_sequences(clips, "clips")
-    check_labels(labels, len(clips), "labels")
+    text = check_labels(labels, len(clips), "labels")
     _check_what(estimator, target, cases)
+    check_two_activities(text, "labels")  # as the fit would, before any clip is described
     plan = fit_plan(estimator)
     described = [
         describe(s, plan) for s in progress(clips, desc="features", total=len(clips), unit="clip")
