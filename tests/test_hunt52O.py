@@ -7,6 +7,7 @@ the refusal and its words are the ones the user met after the work."""
 
 from __future__ import annotations
 
+import csv
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -19,8 +20,9 @@ import cbr.training
 from cbr.estimator import CaseBaseClassifier
 from cbr.training import train
 from features.errors import InputError
-from features.poses import PoseSequence
-from tests.test_cbr_clips import arm_dataset
+from features.poses import PoseSequence, save_pose
+from posecbr.cli import main
+from tests.test_cbr_clips import ACTIVITIES, arm_dataset
 
 
 def _counted(monkeypatch: pytest.MonkeyPatch, module: Any, name: str) -> list[int]:
@@ -92,4 +94,50 @@ def test_train_refuses_one_activity_before_any_clip_is_described(
     db = tmp_path / "cb.sqlite"
     with pytest.raises(InputError, match=r"^labels: the training set has only one activity \('a'"):
         train(db, "arms", X, ["a"] * len(X), CaseBaseClassifier(k=1))
+    assert described == [] and not db.exists()
+
+
+@pytest.fixture
+def arm_folder(arms: tuple[list[PoseSequence], list[str]], tmp_path: Path) -> Path:
+    """The six arm clips as pose files listed by a labels CSV (path, label, subject)."""
+    X, y = arms
+    with open(tmp_path / "labels.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["path", "label", "subject"])
+        for i, (x, label) in enumerate(zip(X, y, strict=True)):
+            save_pose(x, tmp_path / f"c{i}.npz")
+            w.writerow([f"c{i}.npz", label, f"s{i % 2}"])
+    return tmp_path
+
+
+def test_train_refuses_one_activity_of_a_labels_csv_before_the_features(
+    arm_folder: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--labels`` of one activity (``--target`` left out): refused once every clip's
+    features were computed."""
+    described = _counted(monkeypatch, cbr.training, "describe_entries")
+    db = arm_folder / "cb.sqlite"
+    data = arm_folder / "labels.csv"
+    assert main(["train", str(data), "--db", str(db), "--labels", ACTIVITIES[1]]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        f"posecbr train: error: {data}: the training data hold only one activity"
+        f" ({ACTIVITIES[1]!r}); a classifier needs at least two\n"
+    )
+    assert described == [] and not db.exists()
+
+
+def test_train_refuses_a_pose_file_that_is_no_archive_before_the_first_clip(
+    arm_folder: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A truncated pose file listed last was found once the five before it were described."""
+    bad = arm_folder / "c5.npz"
+    bad.write_bytes(bad.read_bytes()[:100])
+    described = _counted(monkeypatch, cbr.training, "describe_entry")
+    db = arm_folder / "cb.sqlite"
+    assert main(["train", str(arm_folder / "labels.csv"), "--db", str(db)]) == 1
+    assert capsys.readouterr().err == (
+        f"posecbr train: error: {bad}: cannot read pose file: not an .npz archive (truncated, or"
+        " another format?)\n"
+    )
     assert described == [] and not db.exists()

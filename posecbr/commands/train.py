@@ -586,6 +586,18 @@ def _one_activity(args: argparse.Namespace, solutions: list[str]) -> None:
         )
 
 
+def _one_listed_activity(args: argparse.Namespace, entries: list[Any]) -> None:
+    """:func:`_one_activity` of the activities DATA's entries name (a folder per class, a
+    labels CSV's label column), before any clip is read: the clips read hold no other. Not
+    of a recording labelled over time, nor of a file whose label is its own metadata's, nor
+    under ``--subjects`` (a file's metadata may name another subject: none left is said),
+    nor of an ``--append`` (cases added to a case base that holds others)."""
+    if args.append or args.target != "label" or args.subjects or not entries:
+        return
+    if all(e.entry.pieces is None and e.entry.label is not None for e in entries):
+        _one_activity(args, [str(e.entry.label) for e in entries])
+
+
 def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any], list[str]]:
     from cbr.training import describe, no_target_value
     from features.progress import progress
@@ -604,8 +616,12 @@ def _described_in_memory(args: argparse.Namespace, plan: Any) -> tuple[list[Any]
 
 
 def _entries(args: argparse.Namespace) -> list[Any]:
-    """The clips DATA names (not read yet), filtered by --subjects and --labels."""
+    """The clips DATA names (not read yet), filtered by --subjects and --labels; a pose file
+    (.npz) among them that is no archive of well-formed arrays within the read limits
+    (truncated, renamed, empty) refused before the first clip is worked on, not when its
+    turn comes (:func:`features.datasets.iter_dataset` reads lazily)."""
     from features.datasets import dataset_entries
+    from features.poses import check_archive
 
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
     activities = [s.strip() for s in args.labels.split(",")] if args.labels else None
@@ -618,6 +634,9 @@ def _entries(args: argparse.Namespace) -> list[Any]:
             people = _held_subjects(args)
             check_found(people, subjects, "--subjects", "of subject", args.data, lambda: people)
         raise _no_clips(args)
+    for e in entries:
+        if e.entry.path.suffix.lower() == ".npz":
+            check_archive(e.entry.path, ("positions",))
     return entries
 
 
@@ -992,6 +1011,7 @@ def run(args: argparse.Namespace) -> int:
             clips, solutions = _described_in_memory(args, plan)
         else:
             entries = _entries(args)
+            _one_listed_activity(args, entries)
             if split_defaulted:
                 _note_cut_stretches(args, entries)
             _note_several_activities(args, entries)
