@@ -17,8 +17,9 @@ import pytest
 
 import cbr.estimator
 import cbr.training
+import posecbr.commands.classify
 from cbr.estimator import CaseBaseClassifier
-from cbr.training import train
+from cbr.training import store_fitted, train
 from features.errors import InputError
 from features.poses import PoseSequence, save_pose
 from posecbr.cli import main
@@ -141,3 +142,25 @@ def test_train_refuses_a_pose_file_that_is_no_archive_before_the_first_clip(
         " another format?)\n"
     )
     assert described == [] and not db.exists()
+
+
+def test_classify_refuses_an_unknown_feedback_label_before_the_clips_are_read(
+    arms: tuple[list[PoseSequence], list[str]],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A typo in ``--feedback`` was refused once every clip was read (a video's poses
+    estimated: minutes); the case base is left as it was."""
+    X, y = arms
+    db = tmp_path / "cb.sqlite"
+    clf = CaseBaseClassifier(k=1, mirror=False, feature_weights="none").fit(X, y)  # fast
+    store_fitted(db, "arms", clf, y)
+    before = db.read_bytes()
+    save_pose(X[0], tmp_path / "new.npz")
+    read = _counted(monkeypatch, posecbr.commands.classify, "load_inputs")
+    argv = ["classify", str(tmp_path / "new.npz"), "--db", str(db), "--feedback", "lunge"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("posecbr classify: error: --feedback: 'lunge' is not an activity of")
+    assert read == [] and db.read_bytes() == before

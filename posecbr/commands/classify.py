@@ -473,9 +473,11 @@ def run(args: argparse.Namespace) -> int:
                 + did_you_mean(target, [stored.target, *_input_columns(args)]),
                 "--target",
             )
-        if args.feedback is not None:
+        if args.feedback is not None:  # before the clips are read (a video's poses: minutes)
+            known = sorted(set(stored.classifier.case_base_.labels.tolist()))
             with as_options(FEEDBACK_OPTIONS):
                 check_feedback_cases(stored)
+                label = check_feedback_label(args.feedback, known, args.new_label, target)
         subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
         labels = [s.strip() for s in args.labels.split(",")] if args.labels else None
         sensor = sensor_for(args.sensor, args.clips)
@@ -486,10 +488,6 @@ def run(args: argparse.Namespace) -> int:
             clips, truths = _each_repetition(clips, truths)
         if args.feedback is None:
             results = classify_clips(stored, clips, truths, target)
-        else:
-            known = sorted(set(stored.classifier.case_base_.labels.tolist()))
-            with as_options(FEEDBACK_OPTIONS):
-                label = check_feedback_label(args.feedback, known, args.new_label, target)
     finally:
         store.close()
     gone: list[str] | None = None  # with feedback: the labels it left without a case
