@@ -42,26 +42,29 @@ this far): a count once a hop stays short however long no repetition is found.""
 @dataclass(frozen=True)
 class Verdict:
     """One repetition's verdict: ``number`` (1, 2, ... in the stream's order), its stream
-    frames [start_frame, end_frame) and its classification (``judged``)."""
+    frames [start_frame, end_frame), counted at ``fps`` (the segmenter's that judged it: a
+    stream watched again at another rate keeps the verdicts given before), and its
+    classification (``judged``)."""
 
     number: int
     start_frame: int
     end_frame: int
     judged: Classification
+    fps: float
 
     @property
     def label(self) -> str | None:
         return self.judged.label
 
-    def to_dict(self, fps: float) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """One of ``watch --split repetitions``' repetition lines: ``repetition`` (its
         number), ``start_s`` and ``end_s``, then the record ``classify --split repetitions
         --json`` gives the same piece (``start_frame``, ``end_frame``, ``label``,
         ``confidence``, ``text``, ...)."""
         return {
             "repetition": self.number,
-            "start_s": round(self.start_frame / fps, 3),
-            "end_s": round(self.end_frame / fps, 3),
+            "start_s": round(self.start_frame / self.fps, 3),
+            "end_s": round(self.end_frame / self.fps, 3),
             **self.judged.to_dict(),
         }
 
@@ -131,4 +134,4 @@ class RepetitionVerdicts:
         # repetitions were cut where classify --split repetitions cuts them; so, 20)
         self.anchor = self.given[-1].start_frame if self.given else span[0]
         self.judged_to = span[1]
-        return Verdict(len(self.given) + 1, span[0], span[1], judged)
+        return Verdict(len(self.given) + 1, span[0], span[1], judged, float(self.live.fps))

@@ -870,7 +870,7 @@ class Watcher:
                 self._emit(segment)
             if self.verdicts is not None:
                 for verdict in self.verdicts.update():
-                    self._print_line(verdict.to_dict(self.live.fps))
+                    self._print_line(verdict.to_dict())
             self._draw(shown_frame, absent)
 
     def _flush(self) -> None:
@@ -1014,7 +1014,7 @@ class Watcher:
             self._emit(segment)
         if self.verdicts is not None:
             for verdict in self.verdicts.update(ended=True):
-                self._print_line(verdict.to_dict(self.live.fps))
+                self._print_line(verdict.to_dict())
 
     def _emit(self, segment: Any) -> None:
         from cbr.segmentation import NO_FRAMES, NOBODY
@@ -1208,13 +1208,14 @@ class Watcher:
                 file=sys.stderr,
             )
         if self.verdicts is not None:
-            _print_verdicts(self.verdicts.given, self.stored.target, float(self.live.fps))
+            _print_verdicts(self.verdicts.given, self.stored.target)
 
 
-def _print_verdicts(verdicts: list[Any], target: str, fps: float) -> None:
+def _print_verdicts(verdicts: list[Any], target: str) -> None:
     """The end of a ``watch --split repetitions``, on stderr: each repetition's verdict, as
-    ``classify --split repetitions`` heads each (the first line of its explanation), and
-    how many got each answer, as its summary counts them."""
+    ``classify --split repetitions`` heads each (the first line of its explanation; its
+    frames and times as its line gave them, at the rate it was judged at), and how many got
+    each answer, as its summary counts them."""
     from collections import Counter
 
     from cbr.explain import label_words
@@ -1228,7 +1229,7 @@ def _print_verdicts(verdicts: list[Any], target: str, fps: float) -> None:
         )
         print(
             f"repetition {v.number}, frames {v.start_frame}-{v.end_frame - 1}"
-            f" ({v.start_frame / fps:.1f}-{v.end_frame / fps:.1f} s): {shown(said)}",
+            f" ({v.start_frame / v.fps:.1f}-{v.end_frame / v.fps:.1f} s): {shown(said)}",
             file=sys.stderr,
         )
     answers = Counter(str(v.label) for v in verdicts if v.label is not None)

@@ -1,0 +1,53 @@
+"""Hunt 52w: a review of the day's changes.
+
+- ``watch --split repetitions``' end listed every verdict's times at the rate the stream
+  was last watched at: a verdict given before the stream was watched again at the rate it
+  rose to (:meth:`posecbr.commands.watch.Watcher._remake`), its frames counted at the first
+  rate, was said at half its time after a rise from 15 to 30 fps. Each verdict now keeps the
+  rate its frames count at (:class:`cbr.live_verdicts.Verdict`).
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+import cbr.live_verdicts as live_verdicts
+from cbr.live_verdicts import RepetitionVerdicts
+from posecbr.commands.watch import _print_verdicts
+
+
+def _judged(*args: Any) -> SimpleNamespace:
+    """``classify_clip``'s stand-in: an incorrect repetition, explained."""
+    text = "an incorrect repetition, confidence 0.78\nwhy: ..."
+    explanation = SimpleNamespace(text=text)
+    return SimpleNamespace(label="incorrect", explanation=explanation, to_dict=lambda: {})
+
+
+def test_a_verdict_before_a_rise_of_the_rate_keeps_its_times(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A repetition of stream frames 15-29 at 15 fps (1.0-2.0 s) judged, then the stream
+    watched again at 30 fps, where frames 90-119 (3.0-4.0 s) are judged: its line says
+    1.0-2.0 s, and the end lists it at 1.0-2.0 s (frames 15-29, as its line gave them) and
+    the second at 3.0-4.0 s. Before, the end read every verdict's frames at 30 fps: the
+    first at 0.5-1.0 s."""
+    monkeypatch.setattr(live_verdicts, "classify_clip", _judged)
+    stored = SimpleNamespace(target="correct")
+    slow = SimpleNamespace(fps=15.0, clip=lambda a, b: None)
+    first = RepetitionVerdicts(stored, slow)  # type: ignore[arg-type]
+    first.given.append(first._judge((15, 30)))
+    line = first.given[0].to_dict()
+    assert (line["repetition"], line["start_s"], line["end_s"]) == (1, 1.0, 2.0)
+    fast = SimpleNamespace(fps=30.0, clip=lambda a, b: None)
+    again = RepetitionVerdicts(stored, fast, first)  # type: ignore[arg-type]
+    assert again.judged_to == 60  # the first's end, frame 30 at 15 fps, at 30 fps
+    again.given.append(again._judge((90, 120)))
+    assert (again.given[1].to_dict()["start_s"], again.given[1].to_dict()["end_s"]) == (3.0, 4.0)
+    _print_verdicts(again.given, "correct")
+    assert capsys.readouterr().err.splitlines()[:2] == [
+        "repetition 1, frames 15-29 (1.0-2.0 s): an incorrect repetition, confidence 0.78",
+        "repetition 2, frames 90-119 (3.0-4.0 s): an incorrect repetition, confidence 0.78",
+    ]
