@@ -5,6 +5,9 @@
   rose to (:meth:`posecbr.commands.watch.Watcher._remake`), its frames counted at the first
   rate, was said at half its time after a rise from 15 to 30 fps. Each verdict now keeps the
   rate its frames count at (:class:`cbr.live_verdicts.Verdict`).
+- ``extract``'s line of the body's parts out of view rounded a part missing in 99.5 % of
+  the frames with a person or more to "100 %", which it says of a part no frame shows:
+  now ">99 %".
 """
 
 from __future__ import annotations
@@ -12,10 +15,13 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
 import pytest
 
 import cbr.live_verdicts as live_verdicts
 from cbr.live_verdicts import RepetitionVerdicts
+from features.skeleton import JOINT_INDEX
+from posecbr.commands.extract import out_of_view
 from posecbr.commands.watch import _print_verdicts
 
 
@@ -51,3 +57,19 @@ def test_a_verdict_before_a_rise_of_the_rate_keeps_its_times(
         "repetition 1, frames 15-29 (1.0-2.0 s): an incorrect repetition, confidence 0.78",
         "repetition 2, frames 90-119 (3.0-4.0 s): an incorrect repetition, confidence 0.78",
     ]
+
+
+def test_extract_says_100_percent_only_of_a_part_out_of_view_in_every_frame() -> None:
+    """``extract``'s line of a close-up whose hips are out of view in 399 of its 400 frames
+    with a person and whose left wrist is in 1: the hips ">99 %", not 100 % (a frame shows
+    them), the wrists "<1 %"; the knees, in none of them, 100 %. Before, the hips' 99.75 %
+    was rounded to "100 %", as if no frame showed them."""
+    positions = np.zeros((400, 33, 3))
+    for name in ("left_knee", "right_knee"):
+        positions[:, JOINT_INDEX[name]] = np.nan
+    positions[1:, JOINT_INDEX["left_hip"]] = np.nan
+    positions[0, JOINT_INDEX["left_wrist"]] = np.nan
+    seq = SimpleNamespace(positions=positions)
+    assert out_of_view(seq, np.zeros(400, dtype=bool)) == (  # type: ignore[arg-type]
+        "; out of view in the frames with a person: wrists <1 %, hips >99 %, knees 100 %"
+    )

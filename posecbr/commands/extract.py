@@ -886,9 +886,17 @@ def out_of_view(seq: PoseSequence, nobody: np.ndarray) -> str:
             if any(m in name for m in marks) and not (part == "hands" and "foot" in name)
         ]
         share = float(missing[:, cols].any(axis=1).mean())
-        if share > 0:
-            said.append(f"{part} {'<1' if share < 0.005 else f'{100 * share:.0f}'} %")
+        if share > 0:  # 100 % when missing in every one of them, never rounded up to it
+            said.append(f"{part} {_share_words(share)} %")
     return f"; out of view in the frames with a person: {', '.join(said)}" if said else ""
+
+
+def _share_words(share: float) -> str:
+    """A share in (0, 1] in whole percent, as :func:`out_of_view` says it: "<1" and ">99"
+    for a share that would round to 0 or, not being all, to 100."""
+    if share < 0.005:
+        return "<1"
+    return ">99" if 0.995 <= share < 1.0 else f"{100 * share:.0f}"
 
 
 def _frames_at(seq: PoseSequence, video_frames: np.ndarray | None) -> str:
