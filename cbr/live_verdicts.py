@@ -131,7 +131,12 @@ class RepetitionVerdicts:
         judged = classify_clip(self.stored, piece, None, self.stored.target)
         # counted on from the start of the one before it: as in a count of the whole stream,
         # the next one begins where it ends (counted from its own start, 14 of 60 joined
-        # repetitions were cut where classify --split repetitions cuts them; so, 20)
-        self.anchor = self.given[-1].start_frame if self.given else span[0]
+        # repetitions were cut where classify --split repetitions cuts them; so, 20); one
+        # judged before the stream was watched again at another rate, on this rate's frames
+        self.anchor = self._frame_of(self.given[-1]) if self.given else span[0]
         self.judged_to = span[1]
         return Verdict(len(self.given) + 1, span[0], span[1], judged, float(self.live.fps))
+
+    def _frame_of(self, verdict: Verdict) -> int:
+        """The stream frame at :attr:`live`'s rate where ``verdict`` begins."""
+        return int(round(verdict.start_frame * self.live.fps / verdict.fps))

@@ -4,7 +4,9 @@
   was last watched at: a verdict given before the stream was watched again at the rate it
   rose to (:meth:`posecbr.commands.watch.Watcher._remake`), its frames counted at the first
   rate, was said at half its time after a rise from 15 to 30 fps. Each verdict now keeps the
-  rate its frames count at (:class:`cbr.live_verdicts.Verdict`).
+  rate its frames count at (:class:`cbr.live_verdicts.Verdict`); the count after the
+  first verdict at the new rate went on from the frame before the last at the old rate's
+  frame number (half as far into the stream from 15 to 30 fps).
 - ``extract``'s line of the body's parts out of view rounded a part missing in 99.5 % of
   the frames with a person or more to "100 %", which it says of a part no frame shows:
   now ">99 %".
@@ -38,8 +40,9 @@ def test_a_verdict_before_a_rise_of_the_rate_keeps_its_times(
     """A repetition of stream frames 15-29 at 15 fps (1.0-2.0 s) judged, then the stream
     watched again at 30 fps, where frames 90-119 (3.0-4.0 s) are judged: its line says
     1.0-2.0 s, and the end lists it at 1.0-2.0 s (frames 15-29, as its line gave them) and
-    the second at 3.0-4.0 s. Before, the end read every verdict's frames at 30 fps: the
-    first at 0.5-1.0 s."""
+    the second at 3.0-4.0 s; the count goes on from the first's start, frame 30 at 30 fps.
+    Before, the end read every verdict's frames at 30 fps: the first at 0.5-1.0 s; and the
+    count after the second went on from frame 15 (0.5 s)."""
     monkeypatch.setattr(live_verdicts, "classify_clip", _judged)
     stored = SimpleNamespace(target="correct")
     slow = SimpleNamespace(fps=15.0, clip=lambda a, b: None)
@@ -51,6 +54,9 @@ def test_a_verdict_before_a_rise_of_the_rate_keeps_its_times(
     again = RepetitionVerdicts(stored, fast, first)  # type: ignore[arg-type]
     assert again.judged_to == 60  # the first's end, frame 30 at 15 fps, at 30 fps
     again.given.append(again._judge((90, 120)))
+    # the count goes on from the start of the one before the last judged: the first's frame
+    # 15 at 15 fps, frame 30 at 30 fps
+    assert again.anchor == 30
     assert (again.given[1].to_dict()["start_s"], again.given[1].to_dict()["end_s"]) == (3.0, 4.0)
     _print_verdicts(again.given, "correct")
     assert capsys.readouterr().err.splitlines()[:2] == [
