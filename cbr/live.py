@@ -146,6 +146,48 @@ class LiveSegment:
 
 
 @dataclass(frozen=True)
+class LiveProgress:
+    """The segment in progress as it stands (:meth:`LiveSegmenter.progress`): frames
+    [start_frame, frame) pushed so far; its label as the decoders have settled it (None:
+    unknown), the one its line carries when it finishes; its confidence so far; the
+    repetitions counted in it that end by ``settled_frame``, the earliest frame a cut of it
+    can still fall on, less the longest window (those its finished line counts too); why it
+    is unknown (``unknown``, as :func:`cbr.segmentation.unknown_reason` says it)."""
+
+    start_frame: int
+    frame: int
+    label: str | None
+    confidence: float
+    repetitions: int
+    settled_frame: int
+    unknown: str | None
+
+    def to_dict(self, fps: float) -> dict[str, Any]:
+        """One of ``watch --progress``'s lines: ``"event": "progress"``; ``t_s`` and
+        ``frame``, the stream's time and frames pushed so far (the segment's end so far, as
+        ``end_s`` and ``end_frame`` are a finished one's); ``since_s``, how long it has gone
+        on; the finished line's fields by the same names (``start_s``, ``start_frame``,
+        ``label``, ``confidence``, ``unknown``, ``repetitions`` and ``count``) as they stand;
+        ``settled_s``, the time up to which it is settled (``settled_frame``). ``fps``: the
+        stream's frames per second (InputError naming it when not a number > 0)."""
+        fields = span_fields(self.start_frame, self.frame, self.label, self.confidence, fps)
+        return {
+            "event": "progress",
+            "t_s": fields["end_s"],
+            "frame": self.frame,
+            "since_s": round((self.frame - self.start_frame) / fps, 3),
+            "start_s": fields["start_s"],
+            "start_frame": self.start_frame,
+            "label": self.label,
+            "confidence": fields["confidence"],
+            "unknown": self.unknown,
+            "repetitions": self.repetitions,
+            "count": self.repetitions,  # as a finished segment's line names it too
+            "settled_s": round(self.settled_frame / fps, 3),
+        }
+
+
+@dataclass(frozen=True)
 class _Judged:
     """A window the segmenter solved: frames [start, stop), its nearest activity, the
     judge's ratio, its distance to the nearest case of every activity and the judge it was
@@ -285,6 +327,16 @@ class _Tally(NamedTuple):
     start: int
     upto: int
     counted: int
+
+
+class _Shown(NamedTuple):
+    """The segment in progress as :meth:`LiveSegmenter.current` counted it at the hop, the
+    start and the label of ``key``: the segment, and the repetitions it counted on the frames
+    after its tally (:meth:`LiveSegmenter._counted`)."""
+
+    key: tuple[int, int, int]
+    segment: LiveSegment
+    kept: tuple[Repetition, ...]
 
 
 @dataclass(frozen=True)
@@ -460,7 +512,7 @@ class LiveSegmenter:
         # the first repetition of the segment after it is known (:meth:`_hold`)
         self.released: list[LiveSegment] = []  # it, judged, not yet given
         self.ended = False  # the stream has ended (finish)
-        self.shown: tuple[tuple[int, int, int], LiveSegment] | None = None  # current()'s
+        self.shown: _Shown | None = None  # current()'s, counted once a hop
         self.judged: list[_Judged] = []  # the windows over the segments not yet finished
         # whose frames are kept: what explains a finished segment
         self.near: deque[float] = deque(maxlen=PERSON_WINDOWS)  # the latest windows'
@@ -1685,13 +1737,44 @@ class LiveSegmenter:
             return None
         state = self.unknown if self.label is None else int(self.state)
         key = (self.hops, self.seen_start, state)
-        if self.shown is None or self.shown[0] != key:
+        if self.shown is None or self.shown.key != key:
             lost_from = self.lost_from
             try:
-                self.shown = (key, self._segment(self.seen_start, self.n, state, False, False))
+                counted = self._counted(self.seen_start, self.n, state, False, False)
             finally:
                 self.lost_from = lost_from
-        return dataclasses.replace(self.shown[1], end_frame=self.n)
+            self.shown = _Shown(key, *counted)
+        return dataclasses.replace(self.shown.segment, end_frame=self.n)
+
+    def progress(self) -> LiveProgress | None:
+        """The segment in progress as the decoders have settled it so far (``watch
+        --progress``'s lines): frames [start, latest pushed); the label its line will carry
+        when it finishes (the label seen, not the rolling label, which may be a change not
+        settled yet that would end the segment before the latest frame); its confidence as
+        that line's is reckoned, so far; and, of the repetitions :meth:`current` counts (the
+        same count, not counted again: its tally and the repetitions after it), those that
+        end by the earliest frame a cut of the segment can still fall on, less the longest
+        window (:meth:`_settled_until`, what the tally takes as final): the frames after it
+        may yet be cut off into another segment, so its finished line counts at least as
+        many. None before the decoders have settled the stream's first hops (some 9 s of
+        stream: no segment's label is known yet), and once the stream has ended
+        (:meth:`finish` gave the last segment)."""
+        if self.ended:
+            return None
+        now = self.current()
+        if now is None or self.seen is None or self.shown is None:
+            return None
+        start = self.seen_start
+        settled = int(min(max(start, self._settled_until()), self.n))
+        if self.seen == self.nobody:
+            told = nobody_explanation(self._absent_in(start, self.n))
+            return LiveProgress(start, self.n, None, 1.0, 0, settled, told)
+        label = None if self.seen == self.unknown else self.classes[self.seen]
+        later = sum(r.end_frame > settled for r in self.shown.kept)
+        count = max(0, now.repetitions - later)
+        confidence = self._confidence(self.seen)
+        return LiveProgress(start, self.n, label, confidence, count, settled,
+                            unknown_reason(label, ""))  # fmt: skip
 
     def finish(self) -> list[LiveSegment]:
         """The segments not yet finished, at the end of the stream (the last one ends there);

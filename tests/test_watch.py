@@ -296,13 +296,16 @@ def test_watch_a_stream_to_its_end_with_max_frames(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """Asked for 120 frames of a camera: the finished segments cover them, with labels of the
-    case base (or unknown), and the latency is reported."""
+    case base (or unknown), each line a finished segment's as without ``--progress``, and the
+    latency is reported."""
     monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 120, "end"))
     capsys.readouterr()
     assert main(["watch", "0", "--db", str(case_base), "--max-frames", "120"]) == 0
     captured = capsys.readouterr()
     lines = [json.loads(line) for line in captured.out.splitlines()]
     assert lines[-1]["end_frame"] == 120
+    # without --progress, each line a finished segment's, no "event" (tests/test_hunt52u.py)
+    assert all("event" not in line for line in lines)
     known = {"JumpJack", "Squat", "KneeRaise", "ArmCircle", "Twist", "ToeTouch", None}
     assert {line["label"] for line in lines} <= known
     assert "latency frame to label" in captured.err

@@ -22,7 +22,13 @@ by the case base once the next one is counted and 0.5 s has passed, given once a
 revised), one JSON line each on stdout as it is judged: ``repetition`` (its number),
 ``start_s``, ``end_s`` and ``classify --json``'s record of the piece (``start_frame``,
 ``end_frame``, ``label``: the verdict, ``confidence``, ``text``: its explanation, ...); the
-last verdict is drawn on the frames, and the end lists every verdict on stderr. At
+last verdict is drawn on the frames, and the end lists every verdict on stderr. With
+``--progress SECONDS``, every SECONDS of the stream while a segment is open, one more line on
+the segment in progress (``"event": "progress"``, :meth:`cbr.live.LiveProgress.to_dict`: its
+label as the decoders have settled it, its repetitions that end before any frame it can
+still be cut on; provisional, never more than its finished line will say), and every line
+says which it is first (``"event": "segment"``, ``"repetition"``); without it the lines are
+as they were. At
 the end the latency from a frame's coming to having its rolling label (drawn on the frame,
 not the JSON lines) is printed on stderr (median,
 95th percentile, worst): a file's frame played at its own rate comes when it is due, as a
@@ -137,6 +143,16 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="the segments are JSON lines already, one per finished segment (taken, as"
         " segment takes it, and changes nothing)",
     )
+    p.add_argument(
+        "--progress",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="also print, every SECONDS of the stream's time while a segment is open, one"
+        ' JSON line {"event": "progress", ...}: its label as settled so far and its'
+        ' repetitions so far (provisional); every line then carries "event" (segment,'
+        " repetition, progress) (default: finished segments alone)",
+    )
     add_k_option(
         p,
         1,
@@ -200,6 +216,8 @@ def _check(args: argparse.Namespace) -> None:
         raise ConfigError(f"must be >= 1, got {args.k}", "-k")
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"must be >= 1, got {args.max_frames}", "--max-frames")
+    if args.progress is not None and not (math.isfinite(args.progress) and args.progress > 0):
+        raise ConfigError(f"must be a number of seconds > 0, got {args.progress:g}", "--progress")
     if args.out is not None:
         check_mp4_name(args.out, args.out_folder, "output video")
         from casebase_store import store_files
@@ -711,6 +729,12 @@ class Watcher:
         self.rescue_path: Path | None = None  # their recording, which a kill leaves playable
         self.drawn = 0  # frames written to it
         self.emitted = 0  # segments printed
+        # --progress SECONDS (None: off): a line on the segment in progress every that many
+        # seconds of the stream, the next at the stream's time next_progress * SECONDS
+        self.every: float | None = getattr(args, "progress", None)  # (a Namespace made in
+        # Python, without the option: off)
+        self.next_progress = 1
+        self.progressed = 0  # progress lines printed
         self.seen = False  # a segment printed saw the person (not nobody in view throughout)
         self.hips_out = 0  # frames in a row showing the shoulders, not the hips (:meth:`_hips`)
         self.said_hips_out = False  # the note that the hips are out of view is said once
@@ -828,7 +852,11 @@ class Watcher:
     def _take(self, frame: Any) -> None:
         kept = self.kept
         if kept is not None and not self.replaying:
-            if self.emitted or (kept and frame.time_s - kept[0].time_s > REMAKE_S):
+            if (
+                self.emitted
+                or self.progressed
+                or (kept and frame.time_s - kept[0].time_s > REMAKE_S)
+            ):
                 self._stop_keeping()  # too late: followed as it is
             else:
                 try:
@@ -870,7 +898,8 @@ class Watcher:
                 self._emit(segment)
             if self.verdicts is not None:
                 for verdict in self.verdicts.update():
-                    self._print_line(verdict.to_dict())
+                    self._print_line(verdict.to_dict(), "repetition")
+            self._progress()
             self._draw(shown_frame, absent)
 
     def _flush(self) -> None:
@@ -928,6 +957,7 @@ class Watcher:
         self._judge_repetitions()
         self._grid = Regrid(fps, self.args.source, interval=1.0 / before)
         self.n = 0
+        self.next_progress = 1  # none printed yet (:meth:`_take`): due from the start again
         if self.writer is not None:  # its frames drawn again, at the new rate
             self.writer.release()
             if self.rescue_path is not None:
@@ -1014,19 +1044,42 @@ class Watcher:
             self._emit(segment)
         if self.verdicts is not None:
             for verdict in self.verdicts.update(ended=True):
-                self._print_line(verdict.to_dict())
+                self._print_line(verdict.to_dict(), "repetition")
 
     def _emit(self, segment: Any) -> None:
         from cbr.segmentation import NO_FRAMES, NOBODY
 
         self.emitted += 1
         self.seen = self.seen or segment.explanation not in (NOBODY, NO_FRAMES)
-        self._print_line(segment.to_dict(self.fps))
+        self._print_line(segment.to_dict(self.fps), "segment")
 
-    def _print_line(self, line: dict[str, Any]) -> None:
-        """One JSON line on stdout, flushed (a segment's or a repetition's)."""
+    def _progress(self) -> None:
+        """``--progress SECONDS`` (:attr:`every`): at the first frame pushed at or after each
+        multiple of SECONDS of the stream's time, the segment in progress as it stands
+        (:meth:`cbr.live.LiveSegmenter.progress`: its label as the decoders have settled it,
+        those of the repetitions drawn that end before any frame it can still be cut on),
+        one line; none while no segment's label is settled yet
+        (the stream's first seconds). Not while the kept frames are watched again
+        (:meth:`_remake`: none was printed before, :meth:`_take`)."""
+        if self.every is None or self.replaying:
+            return
+        reached = math.floor(self.live.n / (self.every * self.live.fps) + 1e-9)
+        if reached < self.next_progress:
+            return
+        self.next_progress = reached + 1
+        now = self.live.progress()
+        if now is not None:
+            self.progressed += 1
+            self._print_line(now.to_dict(self.live.fps))
+
+    def _print_line(self, line: dict[str, Any], event: str | None = None) -> None:
+        """One JSON line on stdout, flushed (a segment's, a repetition's or a progress line);
+        with ``--progress`` each says which it is first, ``"event": event`` (without it, the
+        lines are as they were: every reader took each as a finished segment's)."""
         if self.stdout_gone:
             return
+        if self.every is not None and event is not None:
+            line = {"event": event, **line}
         try:
             print(json.dumps(line), flush=True)
         except BrokenPipeError:  # the program reading the lines has closed them or exited
