@@ -149,9 +149,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=None,
         metavar="SECONDS",
         help="also print, every SECONDS of the stream's time while a segment is open, one"
-        ' JSON line {"event": "progress", ...}: its label as settled so far and its'
-        ' repetitions so far (provisional); every line then carries "event" (segment,'
-        " repetition, progress) (default: finished segments alone)",
+        ' JSON line {"event": "progress", ...}: its label and the repetitions settled so far'
+        " (provisional: never more than its finished line says); every line then carries"
+        ' "event" (segment, repetition, progress) (default: finished segments alone)',
     )
     add_k_option(
         p,
