@@ -40,6 +40,19 @@ class Clip:
     extras: dict[str, Any] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class ListedClip:
+    """A clip as its dataset's listing tells it, its frames not decoded: its file's name,
+    label, subject and extras, as reading it gives them; ``complete``: the extras are all
+    it will have (a pose file's metadata read alone; another reader adds its own)."""
+
+    name: str
+    label: str
+    subject: str | None
+    extras: dict[str, Any]
+    complete: bool
+
+
 def clip_suffix(path: Path) -> str:
     return path.suffix.lower()
 

@@ -46,6 +46,7 @@ from .clip_folders import check_no_extracted_twin, check_not_nested, clip_files,
 from .clips import (
     POSE_SUFFIXES,
     Clip,
+    ListedClip,
     clip_suffix,
     find_asf,
     load_clip,
@@ -56,7 +57,7 @@ from .label_tracks import (
     track_labels,
 )
 from .labels_csv import check_rows_apart, read_labels_csv
-from .poses import PoseSequence
+from .poses import PoseSequence, loaded_metadata, pose_file_metadata
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.uiprmd import UIPRMD_MOVEMENTS, read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
 from .stretches import (
@@ -439,6 +440,33 @@ class DatasetEntry:
         return _keep(label, subject, extras, self.labels, self.subjects, self.movements,
                      self.episodes, self.correct)  # fmt: skip
 
+    def listed(self) -> tuple[ListedClip, ...] | None:
+        """The clip as the listing tells it, its frames not decoded: its label, subject and
+        extras as :meth:`read` gives them (a pose file's metadata read alone), none when it
+        fails the filters; None when only decoding tells its label or subject (a recording
+        labelled over time, a file other than a pose file its listing gives neither)."""
+        e = self.entry
+        if e.pieces is not None:
+            return None
+        meta: dict[str, Any] = {}
+        pose_file = clip_suffix(e.path) in POSE_SUFFIXES
+        if pose_file:
+            meta = loaded_metadata(e.path)
+        if self.fps is not None:
+            meta["fps_source"] = "given"
+        meta_label = meta.pop("label", None)
+        meta_subject = meta.pop("subject", None)
+        meta.pop("frame_offset", None)
+        label = e.label if e.label is not None else meta_label
+        subject = e.subject if e.subject is not None else meta_subject
+        if label is None or (subject is None and not pose_file):
+            return None
+        extras = {**_unshadowed(meta, e.extras), **e.extras}
+        label, subject = str(label), None if subject is None else str(subject)
+        if not self._keep(label, subject, extras):
+            return ()
+        return (ListedClip(e.name, label, subject, extras, pose_file),)
+
     def read(self) -> list[Clip]:
         """The clips it holds (decoded, labelled: one, or one per labelled stretch of a
         recording labelled over time), without those that fail the filters."""
@@ -557,8 +585,6 @@ def _dataset_values(path: str | Path, field: str, sensor: str, or_else: str = ""
     :func:`dataset_movements` ("movement", one of a clip's extras) or
     :func:`dataset_episodes` ("episode", ``or_else`` "take": a clip's take when it has no
     episode, as the ``--episodes`` filter reads it)."""
-    from .poses import pose_file_metadata
-
     path = Path(path)
     kind = detect_kind(path)
     found: set[str] = set()

@@ -755,10 +755,7 @@ def load_pose(path: str | Path) -> PoseSequence:
     if "skeleton" in arrays:
         skeleton = _one_text(arrays["skeleton"], "skeleton", path)
     metadata = _metadata(arrays["metadata"], path) if "metadata" in arrays else {}
-    # the file is the clip's name; what it was made from (a video) is its provenance
-    made_from = str(metadata.pop("source", "") or "")
-    if made_from and made_from != str(path) and "made_from" not in metadata:
-        metadata["made_from"] = made_from
+    metadata = _as_loaded(metadata, path)
     source = str(path)
     try:
         return PoseSequence(
@@ -820,6 +817,21 @@ def pose_file_metadata(path: str | Path) -> dict[str, Any]:
     except _READ_ERRORS as exc:
         raise PoseFileError(f"cannot read pose file ({type(exc).__name__}: {exc})", path) from None
     return _metadata(value, path)
+
+
+def loaded_metadata(path: str | Path) -> dict[str, Any]:
+    """:func:`pose_file_metadata` as the sequence :func:`load_pose` reads holds it (the
+    file's positions not decompressed)."""
+    return _as_loaded(pose_file_metadata(path), Path(path))
+
+
+def _as_loaded(metadata: dict[str, Any], path: Path) -> dict[str, Any]:
+    """A pose file's stored metadata as its sequence holds it: the file is the clip's name,
+    what it was made from (a video: the ``source`` stored) its provenance, ``made_from``."""
+    made_from = str(metadata.pop("source", "") or "")
+    if made_from and made_from != str(path) and "made_from" not in metadata:
+        metadata["made_from"] = made_from
+    return metadata
 
 
 def load_pose_arrays(path: str | Path) -> dict[str, np.ndarray]:

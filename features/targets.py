@@ -22,18 +22,33 @@ def extra(extras: Mapping[str, Any], column: str) -> Any:
 
 def clip_column(clip: Clip, column: str) -> Any:
     """A clip's value of ``column``: label, subject, or a metadata extra (None if absent)."""
-    if column == "label":
-        return clip.label
-    if column == "subject":
-        return clip.subject
-    value = extra(clip.extras, column)
+    value = column_of(clip.label, clip.subject, clip.extras, column)
     return extra(clip.seq.metadata, column) if value is None else value
+
+
+def column_of(label: str, subject: str | None, extras: Mapping[str, Any], column: str) -> Any:
+    """The value of ``column`` of a clip of this label, subject and extras (None if absent)."""
+    if column == "label":
+        return label
+    if column == "subject":
+        return subject
+    return extra(extras, column)
 
 
 def clip_target(clip: Clip, column: str) -> str | None:
     """A clip's value of ``column`` as a class name (:func:`target_value`); None when the clip
     has none (absent or empty)."""
-    value = clip_column(clip, column)
+    return _as_target(clip_column(clip, column))
+
+
+def clip_target_of(
+    label: str, subject: str | None, extras: Mapping[str, Any], column: str
+) -> str | None:
+    """:func:`clip_target` of a clip of this label, subject and extras, not read yet."""
+    return _as_target(column_of(label, subject, extras, column))
+
+
+def _as_target(value: Any) -> str | None:
     return None if value is None or value == "" else target_value(value)
 
 

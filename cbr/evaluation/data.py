@@ -7,6 +7,7 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -64,23 +65,49 @@ def _targets(clips: Sequence[Clip], target: str, source: str) -> np.ndarray:
     values = [clip_target(c, target) for c in clips]
     missing = [i for i, v in enumerate(values) if v is None]
     if missing:
-        from features.text import did_you_mean
-
-        cols = sorted({"label", "subject"} | {k for c in clips for k in c.extras})
-        raise DataError(
-            f"{len(missing)} of {len(clips)} clips have no value for target "
-            f"{target!r} (e.g. {clip_id(clips[missing[0]], missing[0])}); "
-            f"columns available: {', '.join(cols)}" + did_you_mean(target, cols),
-            source,
-        )
+        columns = {k for c in clips for k in c.extras}
+        eg = clip_id(clips[missing[0]], missing[0])
+        raise no_target_error(len(missing), len(clips), eg, columns, target, source)
     return np.array(values, dtype=object)
+
+
+def no_target_error(
+    missing: int, n: int, eg: str, columns: set[str], target: str, source: str
+) -> DataError:
+    """``missing`` of ``n`` clips without a value of ``target`` (``eg`` the first one's
+    name), with the columns the clips have (besides label and subject)."""
+    from features.text import did_you_mean
+
+    cols = sorted({"label", "subject"} | columns)
+    return DataError(
+        f"{missing} of {n} clips have no value for target {target!r} (e.g. {eg}); "
+        f"columns available: {', '.join(cols)}" + did_you_mean(target, cols),
+        source,
+    )
+
+
+def too_few_classes(target: str, counts: Counter[str], source: str) -> DataError | None:
+    """The refusal of targets (their clips counted in ``counts``) with fewer than two classes
+    of two or more clips each; None when there are two."""
+    if sum(n >= 2 for n in counts.values()) >= 2:
+        return None
+    return DataError(
+        f"need at least two classes of {target!r} with two or more clips each; "
+        f"found {dict(counts)}",
+        source,
+    )
 
 
 def _groups(clips: Sequence[Clip], column: str | None, source: str) -> np.ndarray | None:
     """Every clip's model group ``(n,)`` (None when one model serves all clips)."""
     if column is None:
         return None
-    values = [clip_column(c, column) for c in clips]
+    return model_groups([clip_column(c, column) for c in clips], column, source)
+
+
+def model_groups(values: Sequence[Any], column: str, source: str) -> np.ndarray:
+    """The clips' model groups ``(n,)`` from their values of ``column``; one without is
+    refused."""
     if any(v is None for v in values):
         raise DataError(f"some clips have no {column!r} to group the models by", source)
     return np.array([str(v) for v in values], dtype=object)
@@ -141,12 +168,9 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
     single = sorted(c for c, n in counts.items() if n < 2)
     idx = [i for i, v in enumerate(y) if counts[v] >= 2]
     classes = sorted({str(v) for v in y[idx]})
-    if len(classes) < 2:
-        raise DataError(
-            f"need at least two classes of {settings.target!r} with two or more clips each; "
-            f"found {dict(counts)}",
-            source,
-        )
+    refused = too_few_classes(settings.target, counts, source)
+    if refused is not None:
+        raise refused
     return Prepared(
         seqs=[clips[i].seq for i in idx],
         ids=[clip_id(clips[i], i) for i in idx],

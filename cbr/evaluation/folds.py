@@ -48,16 +48,15 @@ def _by_subject(subjects: list[str | None]) -> np.ndarray:
     return np.array([index[str(s)] for s in subjects], dtype=np.int64)
 
 
-def _stratified(data: Prepared, k: int, seed: int) -> tuple[np.ndarray, list[str]]:
-    """Fold of every clip ``(n,)`` by shuffled stratified k-fold (strata: target within
-    group), with fewer folds, and a note, when the smallest stratum is smaller than ``k``."""
+def _stratified(
+    y: np.ndarray, within: np.ndarray | None, k: int, seed: int
+) -> tuple[np.ndarray, list[str]]:
+    """Fold of every clip ``(n,)`` by shuffled stratified k-fold (strata: target ``y`` within
+    group ``within``, both ``(n,)``), with fewer folds, and a note, when the smallest stratum
+    is smaller than ``k``."""
     from sklearn.model_selection import StratifiedKFold
 
-    strat = (
-        data.y
-        if data.within is None
-        else np.array([f"{w}|{v}" for w, v in zip(data.within, data.y, strict=True)])
-    )
+    strat = y if within is None else np.array([f"{w}|{v}" for w, v in zip(within, y, strict=True)])
     smallest = min(Counter(strat).values())
     notes = []
     if smallest < k:
@@ -69,7 +68,7 @@ def _stratified(data: Prepared, k: int, seed: int) -> tuple[np.ndarray, list[str
             )
         notes.append(f"the smallest class has {smallest} clips: using {smallest} folds, not {k}")
         k = smallest
-    fold = np.zeros(len(data.y), dtype=np.int64)
+    fold = np.zeros(len(y), dtype=np.int64)
     skf = StratifiedKFold(n_splits=k, shuffle=True, random_state=seed)
     for i, (_, test) in enumerate(skf.split(np.zeros((len(strat), 1)), strat)):
         fold[test] = i
@@ -82,13 +81,24 @@ def make_folds(data: Prepared, settings: CompareSettings) -> tuple[str, np.ndarr
     LOSO: one fold per subject. Stratified k-fold (shuffled, seeded) is used when asked for, or
     as the fallback when LOSO is impossible (a clip without subject, or a single subject).
     """
+    return fold_numbers(data.y, data.subjects, data.within, settings)
+
+
+def fold_numbers(
+    y: np.ndarray,
+    subjects: Sequence[str | None],
+    within: np.ndarray | None,
+    settings: CompareSettings,
+) -> tuple[str, np.ndarray, list[str]]:
+    """:func:`make_folds` of clips of targets ``y``, subjects and model groups ``within``
+    (each ``(n,)``): what the folds depend on, known before the clips are read."""
     notes: list[str] = []
     if settings.cv == "loso":
-        why = _loso_fallback(data.subjects, int(settings.folds))
+        why = _loso_fallback(list(subjects), int(settings.folds))
         if why is None:
-            return "loso", _by_subject(data.subjects), notes
+            return "loso", _by_subject(list(subjects)), notes
         notes.append(why)
-    fold, k_notes = _stratified(data, int(settings.folds), int(settings.seed))
+    fold, k_notes = _stratified(y, within, int(settings.folds), int(settings.seed))
     return "kfold", fold, notes + k_notes
 
 

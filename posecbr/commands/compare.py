@@ -183,26 +183,40 @@ def parse_params(items: list[str]) -> dict[str, Any]:
     return out
 
 
-def _load(args: argparse.Namespace) -> list[Any]:
+def _load(args: argparse.Namespace, settings: Any) -> list[Any]:
+    """The clips of DATA that ``--labels`` and ``--subjects`` keep, read; what the listing
+    (labels CSV rows, file and folder names, a pose file's metadata) shows wrong refused
+    before the first clip is decoded (:func:`_check_listed`)."""
     from cbr.casebase import frames_of
     from cbr.training import check_listed_once
-    from features.datasets import dataset_labels, dataset_subjects, load_dataset
+    from features.datasets import dataset_entries
+    from features.progress import progress
 
     if not args.data.exists():
         raise DataError("no such dataset (file or folder)", args.data)
-    kw: dict[str, Any] = {
-        "sensor": sensor_for(args.sensor, [args.data]),
-        "progress_desc": "loading",
-    }
+    kw: dict[str, Any] = {"sensor": sensor_for(args.sensor, [args.data])}
     if args.labels:
         kw["labels"] = set(_names(args.labels))
     if args.subjects:
         kw["subjects"] = set(_names(args.subjects))
-    clips = load_dataset(args.data, **kw)
+    entries = dataset_entries(args.data, **kw)
+    _check_listed(args, settings, entries, kw)
+    clips = [c for e in progress(entries, "loading", total=len(entries), unit="clip")
+             for c in e.read()]  # fmt: skip
     # as train and classify: a clip listed twice would be tested twice, and in k-fold folds
     # one copy could be a training case of the other
     check_listed_once([(c.seq.source, *frames_of(c.seq)) for c in clips], str(args.data),
                       "it would be tested twice, or be a training case of itself")  # fmt: skip
+    _check_found(args, [c.label for c in clips], [c.subject for c in clips], kw)
+    return clips
+
+
+def _check_found(
+    args: argparse.Namespace, labels: list[Any], subjects: list[Any], kw: dict[str, Any]
+) -> None:
+    """Refuse a ``--labels`` or ``--subjects`` entry none of the clips (their ``labels`` and
+    ``subjects``) has, naming those the data hold."""
+    from features.datasets import dataset_labels, dataset_subjects
 
     def held_labels() -> Sequence[str]:
         return list(dataset_labels(args.data, sensor=kw["sensor"]))
@@ -212,13 +226,33 @@ def _load(args: argparse.Namespace) -> list[Any]:
 
     check_each_found(
         [
-            ([c.label for c in clips], kw.get("labels"), "--labels", "labelled", held_labels),
-            ([c.subject for c in clips], kw.get("subjects"), "--subjects", "of subject",
-             held_subjects),
+            (labels, kw.get("labels"), "--labels", "labelled", held_labels),
+            (subjects, kw.get("subjects"), "--subjects", "of subject", held_subjects),
         ],
         args.data,
-    )  # fmt: skip
-    return clips
+    )
+
+
+def _check_listed(
+    args: argparse.Namespace, settings: Any, entries: list[Any], kw: dict[str, Any]
+) -> None:
+    """Before any clip is decoded, when the listing tells every clip's label and subject
+    (:meth:`features.datasets.DatasetEntry.listed`): the refusals of a ``--labels`` or
+    ``--subjects`` entry no clip has, of ``--cv loso`` on one subject, of one class
+    (``--labels deep_squat``), of a ``--target`` the clips lack and of a ``-k`` above the
+    smallest training fold (:func:`cbr.evaluation.compare.check_listed`), in the words they
+    had once every clip was read (seconds to minutes of decoding for a typo). Otherwise
+    they come after it."""
+    from cbr.evaluation.compare import check_listed
+
+    listed = [e.listed() for e in entries]
+    if any(one is None for one in listed):
+        return
+    clips = [c for one in listed for c in one]
+    _check_found(args, [c.label for c in clips], [c.subject for c in clips], kw)
+    check_loso_possible(args, clips)
+    with as_options(OPTIONS):
+        check_listed(clips, settings, str(args.data))
 
 
 def _dataset_files(args: argparse.Namespace) -> list[str | Path]:
@@ -630,7 +664,7 @@ def run(args: argparse.Namespace) -> int:
         check_not_poses(o.path, o.what)
     # rows giving frames two labels: refused before any clip is read, as train refuses them
     check_no_overlaps(args.data, set(_names(args.labels)) if args.labels else None)
-    clips = _load(args)
+    clips = _load(args, settings)
     # said with the results' notes (a refusal on the way is then the one line it is)
     rate_note = assumed_rates_note(assumed_rates(c.seq for c in clips),
                                    give_fps_by_converting(args.data))  # fmt: skip
