@@ -641,6 +641,30 @@ def _check_counts(r: Reader, s: Scores, where: str, n_classes: int) -> None:
             r.fail(f"{where}.{key}", f"is a count of clips, got {count}")
 
 
+def _check_per_subject(r: Reader, s: Scores, where: str, clips: list[ClipInfo]) -> None:
+    """``s``'s accuracy per subject held out against the clips: every subject one of theirs,
+    its ``n`` its clips (so the ``n`` add up to the clips) and its accuracy the share of
+    them ``correct`` says were right (``correct`` one per clip, checked before)."""
+    if not s.per_subject:
+        return
+    total = sum(rate.n for rate in s.per_subject.values())
+    if total != len(clips):
+        r.fail(f"{where}.per_subject",
+               f"counts {total} clips in all, not the results' {len(clips)}")  # fmt: skip
+    for person, rate in s.per_subject.items():
+        key = f"{where}.per_subject.{person}"
+        right = [ok for c, ok in zip(clips, s.correct, strict=True) if c.subject == person]
+        if not right:
+            r.fail(key, "names no subject of the results' clips")
+        if rate.n != len(right):
+            r.fail(f"{key}.n", f"must be the subject's {len(right)} clips, got {rate.n}")
+        share = sum(right) / len(right)
+        if not math.isclose(rate.value, share, rel_tol=1e-9, abs_tol=1e-12):
+            r.fail(f"{key}.accuracy",
+                   f"must be the share of the subject's clips correct ({share:g}), got"
+                   f" {rate.value:g}")  # fmt: skip
+
+
 @dataclass
 class CompareResults:
     """Everything a comparison found, as written to ``results.json``.
@@ -755,3 +779,4 @@ class CompareResults:
                     r.fail(
                         f"{where}.{key}", f"must hold one per clip ({n_clips}), got {len(values)}"
                     )
+            _check_per_subject(r, s, where, self.clips)
