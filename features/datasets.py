@@ -440,16 +440,17 @@ class DatasetEntry:
         return _keep(label, subject, extras, self.labels, self.subjects, self.movements,
                      self.episodes, self.correct)  # fmt: skip
 
-    def listed(self) -> tuple[ListedClip, ...] | None:
+    def listed(self, metadata: bool = True) -> tuple[ListedClip, ...] | None:
         """The clip as the listing tells it, its frames not decoded: its label, subject and
-        extras as :meth:`read` gives them (a pose file's metadata read alone), none when it
-        fails the filters; None when only decoding tells its label or subject (a recording
-        labelled over time, a file other than a pose file its listing gives neither)."""
+        extras as :meth:`read` gives them (a pose file's metadata read alone; not read
+        without ``metadata``), none when it fails the filters; None when only decoding (or
+        the metadata not read) tells its label or subject (a recording labelled over time, a
+        file other than a pose file its listing gives neither)."""
         e = self.entry
         if e.pieces is not None:
             return None
         meta: dict[str, Any] = {}
-        pose_file = clip_suffix(e.path) in POSE_SUFFIXES
+        pose_file = clip_suffix(e.path) in POSE_SUFFIXES and metadata
         if pose_file:
             meta = loaded_metadata(e.path)
         if self.fps is not None:

@@ -218,32 +218,34 @@ def _check_k(settings: CompareSettings, folds: np.ndarray) -> None:
         )
 
 
-def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source: str) -> None:
+def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source: str) -> bool:
     """Refuse, from the clips as their dataset lists them (:class:`ListedClip`, nothing
     decoded), what :func:`run_compare` would refuse once every clip is read, in its words: a
     target no clip has a value of (when only decoding can add one, as another reader than
     the pose files' can, only the listing's ``complete`` clips tell), fewer than two classes
     of two clips, a ``k`` above the training clips of the smallest fold. The clips a read
     leaves out (no person shown, too short) only make classes and folds smaller: a refusal
-    here is one the read clips get, the counts it names those of the clips listed."""
+    here is one the read clips get, the counts it names those of the clips listed. Returns
+    whether the listing told all it checks (False: a clip's target or group only a read can
+    tell)."""
     if not listed:
-        return
+        return True
     values = [clip_target_of(c.label, c.subject, c.extras, settings.target) for c in listed]
     if all(v is None for v in values):
         if all(c.complete for c in listed):
             columns = {k for c in listed for k in c.extras}
             n = len(listed)
             raise no_target_error(n, n, listed[0].name, columns, settings.target, source)
-        return
+        return False
     if any(v is None for v in values):
-        return  # which of them a read leaves out, or gives a value, only reading tells
+        return False  # which of them a read leaves out, or gives a value, only reading tells
     y = np.array(values, dtype=object)
     column = settings.within_column
     within = None
     if column is not None:
         groups = [column_of(c.label, c.subject, c.extras, column) for c in listed]
         if any(g is None for g in groups):
-            return
+            return False
         within = model_groups(groups, column, source)
     counts = Counter(y.tolist())
     refused = too_few_classes(settings.target, counts, source)
@@ -254,6 +256,7 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     _, folds, _ = fold_numbers(y[kept], subjects, None if within is None else within[kept],
                                settings)  # fmt: skip
     _check_k(settings, folds)
+    return True
 
 
 def run_compare(
