@@ -619,8 +619,11 @@ def _entries(args: argparse.Namespace) -> list[Any]:
     """The clips DATA names (not read yet), filtered by --subjects and --labels; a pose file
     (.npz) among them that is no archive of well-formed arrays within the read limits
     (truncated, renamed, empty) refused before the first clip is worked on, not when its
-    turn comes (:func:`features.datasets.iter_dataset` reads lazily)."""
+    turn comes (:func:`features.datasets.iter_dataset` reads lazily); several such files
+    named each, as :class:`cbr.training.ClipsFailed` names the clips a cluster could not read."""
+    from cbr.training import ClipsFailed
     from features.datasets import dataset_entries
+    from features.errors import PoseFileError
     from features.poses import check_archive
 
     subjects = [s.strip() for s in args.subjects.split(",")] if args.subjects else None
@@ -634,9 +637,18 @@ def _entries(args: argparse.Namespace) -> list[Any]:
             people = _held_subjects(args)
             check_found(people, subjects, "--subjects", "of subject", args.data, lambda: people)
         raise _no_clips(args)
+    broken = []
     for e in entries:
-        if e.entry.path.suffix.lower() == ".npz":
-            check_archive(e.entry.path, ("positions",))
+        path = e.entry.path  # a pipe or device is left to the reader, which refuses it unread
+        if path.suffix.lower() == ".npz" and path.is_file():
+            try:
+                check_archive(path, ("positions",))
+            except PoseFileError as exc:
+                broken.append((e, exc))
+    if len(broken) == 1:
+        raise broken[0][1]
+    if broken:  # every one named, as a cluster names the clips that failed
+        raise ClipsFailed([f"{e.name}: {exc}" for e, exc in broken])
     return entries
 
 
