@@ -261,8 +261,12 @@ def test_a_workers_or_nannys_address_is_named_for_what_it_is(
     at ... (Worker.identity() got an unexpected keyword argument 'n_workers')" under two
     warnings of its own ("Closing dangling stream")."""
     worker, info = next(iter(client.scheduler_info()["workers"].items()))
-    (tmp_path / "data" / "deep_squat").mkdir(parents=True)  # one clip: the command is quick
-    shutil.copy(DEMO / "m01_s01_e01.npz", tmp_path / "data" / "deep_squat")
+    for activity, clip in (
+        ("deep_squat", "m01_s01_e01.npz"),
+        ("hurdle_step", "m02_s01_e01.npz"),
+    ):  # a clip of each of two activities: the command is quick
+        (tmp_path / "data" / activity).mkdir(parents=True)
+        shutil.copy(DEMO / clip, tmp_path / "data" / activity)
     argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite"), "--scheduler"]
     said = f"--scheduler: {worker} is a Dask worker's address, not the scheduler's"
     refused([*argv, worker], tmp_path, capsys, f"{said} (its scheduler: {address})")

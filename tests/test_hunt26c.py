@@ -44,7 +44,7 @@ def test_feedback_keeps_the_k_asked_for_after_another_process_changes_the_cases(
     clip is now answered by the one nearest case asked for."""
     db = _copy(case_base, tmp_path)
     clips = _clips(case_base)[:3]
-    solve = cbr.classification._solve
+    solve = cbr.classification.classify_clip
     calls = []
 
     def other_process_between(*args: object, **kwargs: object) -> object:
@@ -56,7 +56,7 @@ def test_feedback_keeps_the_k_asked_for_after_another_process_changes_the_cases(
                 other.add_cases("default", [case])
         return solve(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(cbr.classification, "_solve", other_process_between)
+    monkeypatch.setattr(cbr.classification, "classify_clip", other_process_between)
     label = Path(clips[0]).parent.name
     argv = ["classify", *clips, "--db", str(db), "--feedback", label, "-k", "1", "--json"]
     code = main(argv)

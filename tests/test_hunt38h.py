@@ -221,10 +221,11 @@ def test_a_long_recordings_movement_direction_is_found_on_one_blas_thread(
     got = reps.movement_direction(x)
     assert fake.set_to == [1, 2] and fake.threads == 2
     assert abs(float(got @ along)) > 0.999  # the direction it moves along, either sign
-    # a clip's few hundred samples never reach BLAS's threads: left as they are
+    # a clip's few hundred samples too (hunt 52e: on a busy machine BLAS's threads cost a
+    # small SVD hundreds of times its arithmetic)
     fake.set_to.clear()
     short = reps.movement_direction(x[:300])
-    assert fake.set_to == []
+    assert fake.set_to == [1, 2]
     assert abs(float(short @ along)) > 0.99
 
 
