@@ -12,7 +12,6 @@ import io
 import json
 import logging
 import os
-import shutil
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,6 +25,7 @@ from casebase_store import open_store
 from features.cluster import connect, gather, map_outcomes
 from features.poses import load_pose, load_pose_arrays
 from posecbr.cli import main
+from tests import two_activities
 from tests.badinput import refused
 from tests.cluster_tasks import bookkeeping, fail_on_even, square_or_die_once
 from tests.test_pose_extract import SQUAT, _cut
@@ -261,12 +261,7 @@ def test_a_workers_or_nannys_address_is_named_for_what_it_is(
     at ... (Worker.identity() got an unexpected keyword argument 'n_workers')" under two
     warnings of its own ("Closing dangling stream")."""
     worker, info = next(iter(client.scheduler_info()["workers"].items()))
-    for activity, clip in (
-        ("deep_squat", "m01_s01_e01.npz"),
-        ("hurdle_step", "m02_s01_e01.npz"),
-    ):  # a clip of each of two activities: the command is quick
-        (tmp_path / "data" / activity).mkdir(parents=True)
-        shutil.copy(DEMO / clip, tmp_path / "data" / activity)
+    two_activities(tmp_path / "data")
     argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite"), "--scheduler"]
     said = f"--scheduler: {worker} is a Dask worker's address, not the scheduler's"
     refused([*argv, worker], tmp_path, capsys, f"{said} (its scheduler: {address})")

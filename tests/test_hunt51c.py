@@ -6,7 +6,6 @@ an HTTP server waits for a request line) hung the command for good."""
 from __future__ import annotations
 
 import logging
-import shutil
 import socket
 import threading
 from collections.abc import Iterator
@@ -16,6 +15,7 @@ from typing import Any
 import pytest
 
 from features.errors import ConfigError
+from tests import two_activities
 from tests.badinput import refused
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,12 +35,7 @@ def test_a_port_that_takes_the_connection_and_says_nothing_is_refused_in_time(
         silent.bind(("127.0.0.1", 0))
         silent.listen(1)
         address = f"tcp://127.0.0.1:{silent.getsockname()[1]}"
-        for activity, clip in (
-            ("deep_squat", "m01_s01_e01.npz"),
-            ("hurdle_step", "m02_s01_e01.npz"),
-        ):  # a clip of each of two activities: the command is quick
-            (tmp_path / "data" / activity).mkdir(parents=True)
-            shutil.copy(DEMO / clip, tmp_path / "data" / activity)
+        two_activities(tmp_path / "data")
         argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite")]
 
         def run() -> None:
@@ -89,9 +84,7 @@ def test_a_cluster_without_workers_is_said_in_one_line(
     """Dask's scheduler waits the client's timeout for a worker to send the shared arguments
     to, then raised TimeoutError("No valid workers found"): "internal error, a bug in
     posecbr", exit 70."""
-    for activity, clip in (("deep_squat", "m01_s01_e01.npz"), ("hurdle_step", "m02_s01_e01.npz")):
-        (tmp_path / "data" / activity).mkdir(parents=True)
-        shutil.copy(DEMO / clip, tmp_path / "data" / activity)
+    two_activities(tmp_path / "data")
     argv = ["train", str(tmp_path / "data"), "--db", str(tmp_path / "cb.sqlite")]
     address = no_workers.scheduler_address
     refused([*argv, "--scheduler", address], tmp_path, capsys, f"--scheduler: {NO_WORKER}")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -29,19 +28,7 @@ from features.errors import DataError
 from features.poses import save_pose
 from posecbr.cli import main
 from tests.test_cbr_clips import ACTIVITIES, arm_dataset
-
-
-def _counted(monkeypatch: pytest.MonkeyPatch, module: Any, name: str) -> list[int]:
-    """``module.name`` replaced by the same function that also counts its calls."""
-    real: Callable[..., Any] = getattr(module, name)
-    calls: list[int] = []
-
-    def counting(*args: Any, **kwargs: Any) -> Any:
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(module, name, counting)
-    return calls
+from tests.test_hunt52o import _counted
 
 
 @pytest.fixture(scope="module")
