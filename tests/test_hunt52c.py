@@ -23,6 +23,7 @@ from features.pose_estimation import StreamFrame
 from features.pose_estimation.tracker import FramePose
 from posecbr.cli import main
 from tests.once import made_once
+from tests.test_hunt52u import SEGMENT_KEYS
 
 BUNDLED = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
 # s08's episodes in the session's order, and whether each is an incorrect one
@@ -78,7 +79,10 @@ def _camera(pose: str) -> Any:
 @pytest.fixture(scope="module")
 def watched(session: dict[str, Any]) -> tuple[list[dict[str, Any]], str, list[dict[str, Any]]]:
     """The watch's lines (stdout) and stderr, and classify --split repetitions' records of
-    the same session."""
+    the same session. Watched with ``--progress 1`` (each line tagged with its ``"event"``,
+    :func:`test_with_progress_each_line_says_its_event_the_verdicts_otherwise_unchanged`):
+    the 10-s session ends before any segment's label is settled, so no progress line comes
+    and the lines are the verdicts and the segment, as without it."""
     import contextlib
     import io
 
@@ -87,8 +91,8 @@ def watched(session: dict[str, Any]) -> tuple[list[dict[str, Any]], str, list[di
         mp.setattr(pose_estimation, "stream_poses", stream)
         out, err = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            argv = ["watch", "0", "--db", session["db"], "--unknown", "held-out",
-                    "--split", "repetitions", "--max-frames", str(n)]  # fmt: skip
+            argv = ["watch", "0", "--db", session["db"], "--unknown", "held-out", "--split",
+                    "repetitions", "--max-frames", str(n), "--progress", "1"]  # fmt: skip
             assert main(argv) == 0, err.getvalue()
     lines = [json.loads(line) for line in out.getvalue().splitlines()]
     got = io.StringIO()
@@ -171,3 +175,23 @@ def test_a_watch_of_a_repetition_check_without_split_points_to_it(
     ) in err
     note_not_windows(stored, session["db"], "watch", each=True)
     assert capsys.readouterr().err == ""
+
+
+def test_with_progress_each_line_says_its_event_the_verdicts_otherwise_unchanged(
+    watched: tuple[list[dict[str, Any]], str, list[dict[str, Any]]],
+) -> None:
+    """``--split repetitions`` with ``--progress``: every line says first what it is, the
+    four verdicts ``"event": "repetition"`` and the session's one segment ``"segment"``
+    (README "Progress lines"); a verdict's fields are otherwise those without it: its
+    number and times, then classify's record's fields in their order (all but
+    ``made_from``, the file a pose file was made from: a camera's has none)."""
+    lines, _, offline = watched
+    assert [line["event"] for line in lines].count("repetition") == 4
+    assert [line["event"] for line in lines].count("segment") == 1
+    assert {line["event"] for line in lines} == {"repetition", "segment"}
+    record = [k for k in offline[0] if k != "made_from"]
+    for line in lines:
+        if line["event"] == "repetition":
+            assert list(line) == ["event", "repetition", "start_s", "end_s", *record]
+        else:
+            assert list(line) == ["event", *SEGMENT_KEYS]
