@@ -1200,8 +1200,9 @@ class LiveSegmenter:
         stream's start and, once it has ended, its end as a recording's), whatever the
         segments: the count ``watch --split repetitions`` judges, as ``classify --split
         repetitions`` counts a whole recording. The last may be one still in progress
-        (its end where the frames end). ``start`` not a whole number >= 0: InputError."""
-        if not (isinstance(start, int | np.integer) and start >= 0):
+        (its end where the frames end). ``start`` not a whole number >= 0 (True and False
+        too: not frame numbers, though Python counts them as ints): InputError."""
+        if isinstance(start, bool) or not (isinstance(start, int | np.integer) and start >= 0):
             raise InputError(f"start must be a frame number >= 0, got {start!r}", self.source)
         reps = self._count_kept(int(start), self.n, (False, False))
         return tuple((int(r.start_frame), int(r.end_frame)) for r in reps)

@@ -90,8 +90,8 @@ class RepetitionVerdicts:
         if before is not None:  # the stream watched again at another rate (watch's re-make):
             # its verdicts stand, numbered on, the count going on from the same time
             self.given = list(before.given)
-            self.anchor = int(round(before.anchor * live.fps / before.live.fps))
-            self.judged_to = int(round(before.judged_to * live.fps / before.live.fps))
+            self.anchor = self._frame_of(before.anchor, before.live.fps)
+            self.judged_to = self._frame_of(before.judged_to, before.live.fps)
 
     @property
     def last(self) -> Verdict | None:
@@ -133,10 +133,13 @@ class RepetitionVerdicts:
         # the next one begins where it ends (counted from its own start, 14 of 60 joined
         # repetitions were cut where classify --split repetitions cuts them; so, 20); one
         # judged before the stream was watched again at another rate, on this rate's frames
-        self.anchor = self._frame_of(self.given[-1]) if self.given else span[0]
+        last = self.given[-1] if self.given else None
+        self.anchor = span[0] if last is None else self._frame_of(last.start_frame, last.fps)
         self.judged_to = span[1]
         return Verdict(len(self.given) + 1, span[0], span[1], judged, float(self.live.fps))
 
-    def _frame_of(self, verdict: Verdict) -> int:
-        """The stream frame at :attr:`live`'s rate where ``verdict`` begins."""
-        return int(round(verdict.start_frame * self.live.fps / verdict.fps))
+    def _frame_of(self, frame: int, fps: float) -> int:
+        """The stream frame at :attr:`live`'s rate at the time of ``frame`` at ``fps`` (a
+        verdict's start, or a count's frame, given before the stream was watched again at
+        another rate)."""
+        return int(round(frame * self.live.fps / fps))

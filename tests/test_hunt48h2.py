@@ -140,8 +140,9 @@ def test_a_stream_lost_gives_the_segments_of_the_frames_watched(
     """A camera that sends 150 frames (5 s of CMU 13_30's jumping jacks) and then stops, or
     stalls past ``--stall``: the segments printed cover the 150 frames watched, one after
     the other from frame 0 (the segment in progress given as at the end of a file), then
-    the one line saying the stream was lost, exit 1. The segment in progress was never
-    printed (here: no line at all), nor was an activity going on when the camera was lost."""
+    the watch's summary (hunt 52y) and the one line saying the stream was lost, exit 1. The
+    segment in progress was never printed (here: no line at all), nor was an activity going
+    on when the camera was lost."""
     monkeypatch.setattr(pose_estimation, "stream_poses", _mocap_stream(shared_data, 150, then))
     capsys.readouterr()
     assert main(["watch", "0", "--db", str(case_base), "--stall", "0.5"]) == 1
@@ -151,7 +152,9 @@ def test_a_stream_lost_gives_the_segments_of_the_frames_watched(
     for a, b in zip(lines[:-1], lines[1:], strict=True):
         assert a["end_frame"] == b["start_frame"]
     lost = "the stream ended after 150 frames" if then == "end" else "stalled: no frame for 0.5 s"
-    assert printed.err.count("\n") == 1 and lost in printed.err, printed.err
+    summary, error, end = printed.err.split("\n")
+    assert summary.startswith("watched 150 frames in ") and end == "", printed.err
+    assert lost in error, printed.err
 
 
 def test_sigterm_while_a_camera_sends_nothing_ends_the_watch_there(

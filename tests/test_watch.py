@@ -250,8 +250,9 @@ def test_watch_refuses_a_stream_that_stalls(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """A camera that sends 90 frames and then nothing past ``--stall``: one line saying it
-    stalled and that the video of the 90 frames watched was written, exit 1 (the watch did
+    """A camera that sends 90 frames and then nothing past ``--stall``: the watch's summary
+    (the 90 frames watched, their latency), then one line saying it stalled and that the
+    video of the 90 frames watched was written, exit 1 (the watch did
     not end as asked); the video is finished, every one of the 90 frames in it, and no
     temporary is left. (The hour's video was dropped as if half-written.)"""
     import cv2
@@ -260,10 +261,11 @@ def test_watch_refuses_a_stream_that_stalls(
     out = tmp_path / "out.mp4"
     capsys.readouterr()
     assert main(["watch", "0", "--db", str(case_base), "--stall", "0.5", "--out", str(out)]) == 1
-    err = capsys.readouterr().err
-    assert err == (
+    summary, error, end = capsys.readouterr().err.split("\n")
+    assert summary.startswith("watched 90 frames in ") and "latency frame to label" in summary
+    assert error + end == (
         "posecbr watch: error: 0: the stream stalled: no frame for 0.5 s; the video of the 90"
-        f" frames watched was written to {out}\n"
+        f" frames watched was written to {out}"
     )
     assert list(tmp_path.iterdir()) == [out]  # no temporary left
     cap = cv2.VideoCapture(str(out))
@@ -285,8 +287,9 @@ def test_watch_reports_a_camera_that_stops_sending(
     capsys.readouterr()
     assert main(["watch", "0", "--db", str(case_base)]) == 1
     captured = capsys.readouterr()
-    assert "the stream ended after 120 frames" in captured.err
-    assert captured.err.count("\n") == 1
+    summary, error, end = captured.err.split("\n")  # the watch's summary, then the loss
+    assert summary.startswith("watched 120 frames in ") and end == ""
+    assert "the stream ended after 120 frames" in error
 
 
 def test_watch_a_stream_to_its_end_with_max_frames(

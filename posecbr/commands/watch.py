@@ -776,13 +776,16 @@ class Watcher:
         """:meth:`follow` until the stream ends or the user stops it (``stop``: Ctrl-C); the
         video writer is released either way. A stream lost (:class:`StreamLost`) has the
         segments in progress printed first, as at the end of a file: its frames were
-        watched (before, an activity going on when the camera was lost was never said)."""
+        watched (before, an activity going on when the camera was lost was never said), and
+        the watch's summary on stderr (:meth:`_summary`: the latency, each repetition's
+        verdict; before, a stream lost said neither)."""
         self.is_file = is_file
         try:
             self.follow(frames, is_file, stop)
         except StreamLost:
             self._flush()
             self._finish()
+            self._summary()
             raise
         finally:
             if self.writer is not None:  # kept until the video is in place (:meth:`drop_rescue`)
@@ -904,10 +907,19 @@ class Watcher:
 
     def _flush(self) -> None:
         """The stream has ended: push the grid times of the frame the grid held for the next
-        (:meth:`Regrid.flush`), if any, its latency counted."""
+        (:meth:`Regrid.flush`), if any, its latency counted. A rise of the rate taken while
+        they are given (:attr:`Regrid.rose`, the frames after it not given) has the stream
+        watched again at it (:meth:`_remake`), as when it is taken before the end. Before,
+        the frames held after the rise were dropped and the stream followed at its first
+        rate."""
         if self._grid is None or not self._grid.held or self.stdout_gone:
             return
-        self._push(self._grid.flush())
+        taken = self._grid.flush()
+        if self.kept is not None and self._grid.rose is not None:
+            # the rate rose at a frame held: watched again at it, as had another frame come
+            self._remake(self._grid.rose, ended=True)
+            taken = self._grid.flush()  # the new grid's held (not re-made again: not remakable)
+        self._push(taken)
         now = time.perf_counter()
         for since in self.held_since:
             self.latency.add(now - since)
@@ -931,13 +943,15 @@ class Watcher:
         )
         self._stop_keeping()
 
-    def _remake(self, fps: float) -> None:
+    def _remake(self, fps: float, ended: bool = False) -> None:
         """Watch a live source again from its first frame at ``fps``, the rate it rose to
         within :data:`REMAKE_S` of it, before any segment was given (:attr:`kept`): a new
         segmenter and grid (:class:`Regrid` on the wall clock from the first frame, the
         frames before the rise resampled to ``fps``), the frames kept taken again (the
         ``--out`` video drawn again at ``fps``; a ``--show`` window not shown them twice, nor
-        a note said twice), said once on stderr. A stream that starts slow (a camera's auto
+        a note said twice), said once on stderr; ``ended``: the rise was taken among the
+        frames held when the stream ended (:meth:`_flush`, which counts their latency), every
+        kept frame taken again. A stream that starts slow (a camera's auto
         exposure settling, a network stream's start) was watched at its first second's rate
         for good: at 15 fps then 30, half its frames resampled away."""
         from cbr.live import LiveSegmenter
@@ -965,14 +979,16 @@ class Watcher:
             self.writer, self.rescue_path, self.drawn = None, None, 0
         grid, grid.quiet = self._grid, True  # its notes said as the frames first came
         self.spent = images  # closed once the grid holds no kept frame (:meth:`_take`)
+        in_hand = [] if ended else kept[-1:]
         try:
             self.replaying = True
             try:
-                for frame in kept[:-1]:
+                for frame in kept[: len(kept) - len(in_hand)]:
                     self._take(frame)
             finally:
                 self.replaying = False
-            self._take(kept[-1])  # the frame in hand: its latency counted
+            for frame in in_hand:
+                self._take(frame)  # the frame in hand: its latency counted
         finally:
             grid.quiet = False
 
@@ -1250,6 +1266,13 @@ class Watcher:
                 " frames after them, if any, were not watched)",
                 file=sys.stderr,
             )
+        self._summary()
+
+    def _summary(self) -> None:
+        """On stderr: how many frames were watched, how fast, and their latency frame to
+        label; with ``--split repetitions``, each repetition's verdict and how many got each
+        answer. Said at the end of a watch (:meth:`close`) and before a stream lost is
+        (:meth:`watch`)."""
         if self.latency.count:
             ms = self.latency.percentile
             wall = time.perf_counter() - self.started
