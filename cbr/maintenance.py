@@ -32,10 +32,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from casebase_store import CaseBaseInfo, StoreTransaction
 from features.body import MIRRORED
 from features.progress import progress
 from features.text import percent
@@ -44,6 +44,9 @@ from .casebase import CaseBase, frame_array
 from .retrieve import retrieve
 from .reuse import Weights, decide, vote
 from .words import DROPPED as DROPPED
+
+if TYPE_CHECKING:  # the store itself only for a trim recorded in it (record_trim)
+    from casebase_store import CaseBaseInfo, StoreTransaction
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import pkgutil
 import re
 import sys
 from collections.abc import Sequence
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from features.errors import PosecbrError
 from features.interrupts import (
@@ -29,6 +29,9 @@ from features.interrupts import (
 )
 from features.text import did_you_mean, shown
 from posecbr import __version__, commands
+
+if TYPE_CHECKING:
+    from casebase_store import NotADatabase
 
 #: the actions that gather what each occurrence gives (``--param``): given again, not refused
 REPEATABLE_ACTIONS = (
@@ -305,9 +308,11 @@ def _said_for(
     """``exc`` as the command says it: a file that is no case base, given to an option
     (``--db``, ``casebase copy --to``), is said with the option that takes the case base
     file (the store does not know the command line)."""
-    from casebase_store import NotADatabase
-
-    if not isinstance(exc, NotADatabase) or exc.source is None:
+    store = sys.modules.get("casebase_store")  # never imported: none of its errors raised
+    if store is None:
+        return exc
+    not_a_database: type[NotADatabase] = store.NotADatabase
+    if not isinstance(exc, not_a_database) or exc.source is None:
         return exc
     for action in command._actions:
         given = getattr(args, action.dest, None)

@@ -8,10 +8,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from features.errors import DataError
+from features.clips import ListedClip
+from features.errors import ConfigError, DataError
+from features.targets import clip_target_of, column_of
 from features.text import counted
 
-from .data import Prepared
+from .data import Prepared, model_groups, no_target_error, too_few_classes
 from .settings import CompareSettings
 
 _OPTIMISTIC = "(optimistic: {} in training and test)"
@@ -115,3 +117,56 @@ def unseen_class_notes(data: Prepared, folds: np.ndarray) -> list[str]:
                 "predicted when that subject is held out"
             )
     return notes
+
+
+def check_k(settings: CompareSettings, folds: np.ndarray) -> None:
+    """Refuse a ``k`` larger than a fold's training clips: the vote would take every case
+    there is, and the accuracy change with the fold's size, not with ``k``."""
+    _, held = np.unique(folds, return_counts=True)
+    fewest = int(len(folds) - held.max())
+    if int(settings.k) > fewest:
+        raise ConfigError(
+            f"must be at most {fewest}, the training clips of the smallest fold, got "
+            f"{settings.k} (5 unless given): give `k={fewest}` or less",
+            "k",
+        )
+
+
+def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source: str) -> bool:
+    """Refuse, from the clips as their dataset lists them (:class:`ListedClip`, nothing decoded),
+    what :func:`cbr.evaluation.compare.run_compare` would refuse once every clip is read, in its
+    words: a target no clip has a value of (when only decoding can add one, as another reader than
+    the pose files' can, only the listing's ``complete`` clips tell), fewer than two classes of two
+    clips, a ``k`` above the training clips of the smallest fold. The clips a read leaves out (no
+    person shown, too short) only make classes and folds smaller: a refusal here is one the read
+    clips get, the counts it names those of the clips listed. Returns whether the listing told all
+    it checks (False: a clip's target or group only a read can tell)."""
+    if not listed:
+        return True
+    values = [clip_target_of(c.label, c.subject, c.extras, settings.target) for c in listed]
+    if all(v is None for v in values):
+        if all(c.complete for c in listed):
+            columns = {k for c in listed for k in c.extras}
+            n = len(listed)
+            raise no_target_error(n, n, listed[0].name, columns, settings.target, source)
+        return False
+    if any(v is None for v in values):
+        return False  # which of them a read leaves out, or gives a value, only reading tells
+    y = np.array(values, dtype=object)
+    column = settings.within_column
+    within = None
+    if column is not None:
+        groups = [column_of(c.label, c.subject, c.extras, column) for c in listed]
+        if any(g is None for g in groups):
+            return False
+        within = model_groups(groups, column, source)
+    counts = Counter(y.tolist())
+    refused = too_few_classes(settings.target, counts, source)
+    if refused is not None:
+        raise refused
+    kept = np.array([counts[v] >= 2 for v in y])
+    subjects = [c.subject for c, keep in zip(listed, kept, strict=True) if keep]
+    _, folds, _ = fold_numbers(y[kept], subjects, None if within is None else within[kept],
+                               settings)  # fmt: skip
+    check_k(settings, folds)
+    return True

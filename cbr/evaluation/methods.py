@@ -9,8 +9,7 @@ from typing import Any
 from features.errors import ConfigError, InputError, ParameterError
 
 from ..similarity import get_measure
-from .peers import DTWKNNPeer, MiniRocketPeer, minirocket_backend
-from .settings import CompareSettings
+from .settings import CompareSettings, minirocket_backend
 
 
 @dataclass(frozen=True)
@@ -90,6 +89,8 @@ def make_estimator(method: Method) -> Any:
         from ..dad import DADClassifier
 
         return DADClassifier()
+    from .peers import DTWKNNPeer, MiniRocketPeer  # scikit-learn: imported for a peer run only
+
     if method.name == "dtw-knn":
         return DTWKNNPeer(**method.params)
     if method.name == "minirocket":

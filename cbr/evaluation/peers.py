@@ -3,7 +3,6 @@ the eight limb angles of each clip."""
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 import uuid
 import warnings
@@ -16,6 +15,8 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from features.derived import derived
 from features.errors import ConfigError, DataError
 from features.poses import PoseSequence
+
+from .settings import minirocket_backend
 
 # The eight limb angles the peers see (elbows, knees, armpits, hips): raw joint angles in
 # radians from the same state signals the fluents are computed from.
@@ -117,14 +118,6 @@ class DTWKNNPeer(ClassifierMixin, BaseEstimator):
 
     def predict(self, X: Sequence[PoseSequence]) -> np.ndarray:
         return np.asarray(self.model_.predict(self._series(X)))
-
-
-def minirocket_backend() -> str | None:
-    """``"sktime"`` or ``"aeon"`` when one of them is installed, else None."""
-    for name in ("sktime", "aeon"):
-        if importlib.util.find_spec(name) is not None:
-            return name
-    return None
 
 
 def _minirocket(random_state: int) -> Any:

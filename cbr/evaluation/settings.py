@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -182,3 +183,12 @@ def similarity_words(key: str) -> str:
         f"{'y' if len(owners) == 1 else 'ies'}, as train --param takes it; here --param"
         f" similarity_params='{{\"{key}\": VALUE}}' with --similarities {','.join(owners)})"
     )
+
+
+def minirocket_backend() -> str | None:
+    """``"sktime"`` or ``"aeon"`` when one of them is installed, else None (found, not
+    imported: asking costs no import of either)."""
+    for name in ("sktime", "aeon"):
+        if importlib.util.find_spec(name) is not None:
+            return name
+    return None

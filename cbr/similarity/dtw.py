@@ -35,7 +35,6 @@ from typing import Any, ClassVar
 
 import numba
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from features.errors import ConfigError, InputError
 
@@ -388,6 +387,8 @@ def segment_envelopes(
 
 def envelope(seqs: np.ndarray, radius: int) -> tuple[np.ndarray, np.ndarray]:
     """Upper and lower envelopes over ``[i-radius, i+radius]`` of ``(n, L, d)`` sequences."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d  # a third of a second: on use
+
     size = 2 * radius + 1
     up = maximum_filter1d(seqs, size=size, axis=1, mode="nearest")
     lo = minimum_filter1d(seqs, size=size, axis=1, mode="nearest")

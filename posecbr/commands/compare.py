@@ -187,8 +187,6 @@ def _load(args: argparse.Namespace, settings: Any) -> list[Any]:
     """The clips of DATA that ``--labels`` and ``--subjects`` keep, read; what the listing
     (labels CSV rows, file and folder names, a pose file's metadata) shows wrong refused
     before the first clip is decoded (:func:`_check_listed`)."""
-    from cbr.casebase import frames_of
-    from cbr.training import check_listed_once
     from features.datasets import dataset_entries
     from features.progress import progress
 
@@ -201,6 +199,9 @@ def _load(args: argparse.Namespace, settings: Any) -> list[Any]:
         kw["subjects"] = set(_names(args.subjects))
     entries = dataset_entries(args.data, **kw)
     _check_listed(args, settings, entries, kw)
+    from cbr.casebase import frames_of  # after the refusals: the store's modules come with it
+    from cbr.training import check_listed_once
+
     clips = [c for e in progress(entries, "loading", total=len(entries), unit="clip")
              for c in e.read()]  # fmt: skip
     # as train and classify: a clip listed twice would be tested twice, and in k-fold folds
@@ -240,11 +241,11 @@ def _check_listed(
     (:meth:`features.datasets.DatasetEntry.listed`): the refusals of a ``--labels`` or
     ``--subjects`` entry no clip has, of ``--cv loso`` on one subject, of one class
     (``--labels deep_squat``), of a ``--target`` the clips lack and of a ``-k`` above the
-    smallest training fold (:func:`cbr.evaluation.compare.check_listed`), in the words they
+    smallest training fold (:func:`cbr.evaluation.folds.check_listed`), in the words they
     had once every clip was read (seconds to minutes of decoding for a typo). Otherwise
     they come after it. The pose files' metadata is read only when the names and rows do
     not tell (a tenth of a second for the demo's 180 files, a quarter of their decoding)."""
-    from cbr.evaluation.compare import check_listed
+    from cbr.evaluation.folds import check_listed
 
     for metadata in (False, True):
         listed = [e.listed(metadata) for e in entries]
@@ -646,10 +647,7 @@ STRETCHES_NOTE = (
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.evaluation.compare import run_compare
     from cbr.evaluation.methods import check_cbr_params
-    from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
-    from cbr.evaluation.tables import format_table
     from features.datasets import check_no_overlaps, labelled_over_time
     from features.poses import check_not_poses
 
@@ -673,6 +671,11 @@ def run(args: argparse.Namespace) -> int:
                                    give_fps_by_converting(args.data))  # fmt: skip
     check_loso_possible(args, clips)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
+    # the run's modules (scikit-learn among them) after the refusals, which need none of them
+    from cbr.evaluation.compare import run_compare
+    from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
+    from cbr.evaluation.tables import format_table
+
     with as_options(OPTIONS):  # a k or --within the folds cannot take, a scheduler lost
         run_ = run_compare(clips, settings, source=str(args.data))
     results = run_.results
