@@ -32,7 +32,11 @@ def column_of(label: str, subject: str | None, extras: Mapping[str, Any], column
         return label
     if column == "subject":
         return subject
-    return extra(extras, column)
+    value = extra(extras, column)
+    if value is None:  # named in another case: a read clip's metadata holds both
+        low = column.strip().lower()
+        return label if low == "label" else subject if low == "subject" else None
+    return value
 
 
 def clip_target(clip: Clip, column: str) -> str | None:

@@ -138,9 +138,11 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     words: a target no clip has a value of (when only decoding can add one, as another reader than
     the pose files' can, only the listing's ``complete`` clips tell), fewer than two classes of two
     clips, a ``k`` above the training clips of the smallest fold. The clips a read leaves out (no
-    person shown, too short) only make classes and folds smaller: a refusal here is one the read
-    clips get, the counts it names those of the clips listed. Returns whether the listing told all
-    it checks (False: a clip's target or group only a read can tell)."""
+    person shown, too short) only make classes smaller, but may leave more folds (a class of two
+    then gone no longer caps them): ``k`` is refused here only above what a fold of the clips
+    read could train on (:func:`_most_trained`). A refusal here is one the read clips get, the
+    counts it names those of the clips listed. Returns whether the listing told all it checks
+    (False: a clip's target or group only a read can tell)."""
     if not listed:
         return True
     values = [clip_target_of(c.label, c.subject, c.extras, settings.target) for c in listed]
@@ -166,7 +168,25 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
         raise refused
     kept = np.array([counts[v] >= 2 for v in y])
     subjects = [c.subject for c, keep in zip(listed, kept, strict=True) if keep]
-    _, folds, _ = fold_numbers(y[kept], subjects, None if within is None else within[kept],
-                               settings)  # fmt: skip
-    check_k(settings, folds)
+    scheme, folds, _ = fold_numbers(y[kept], subjects, None if within is None else within[kept],
+                                    settings)  # fmt: skip
+    if int(settings.k) > _most_trained(scheme, folds, int(settings.folds)):
+        check_k(settings, folds)
     return True
+
+
+def _most_trained(scheme: str, folds: np.ndarray, k_folds: int) -> int:
+    """The most training clips the smallest fold can have once the clips listed in ``folds``
+    (a fold each, by ``scheme``) are read, whichever of them the read leaves out: ``n`` clips
+    in ``f`` folds leave at most ``n - ceil(n / f)`` to train on, ``n`` and ``f`` at most the
+    listing's (``k_folds`` folds of k-fold; under leave-one-subject-out its subjects, or the
+    k-fold that one subject left falls back to)."""
+
+    def most(n: int, f: int) -> int:
+        return n - -(-n // f)
+
+    n = len(folds)
+    if scheme != "loso":
+        return most(n, k_folds)
+    held = np.unique(folds, return_counts=True)[1]
+    return max(most(n, len(held)), most(int(held.max()), k_folds))
