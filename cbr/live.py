@@ -152,7 +152,10 @@ class LiveProgress:
     unknown), the one its line carries when it finishes; its confidence so far; the
     repetitions counted in it that end by ``settled_frame``, the earliest frame a cut of it
     can still fall on, less the longest window (those its finished line counts too); why it
-    is unknown (``unknown``, as :func:`cbr.segmentation.unknown_reason` says it)."""
+    is unknown (``unknown``, as :func:`cbr.segmentation.unknown_reason` says it);
+    ``still_frame``: while the person holds still, the first frame of the latest windows
+    that are each too still for any activity, in a row (None while they move:
+    :attr:`LiveSegmenter.still_from`)."""
 
     start_frame: int
     frame: int
@@ -161,6 +164,7 @@ class LiveProgress:
     repetitions: int
     settled_frame: int
     unknown: str | None
+    still_frame: int | None = None
 
     def to_dict(self, fps: float) -> dict[str, Any]:
         """One of ``watch --progress``'s lines: ``"event": "progress"``; ``t_s`` and
@@ -168,9 +172,12 @@ class LiveProgress:
         ``end_s`` and ``end_frame`` are a finished one's); ``since_s``, how long it has gone
         on; the finished line's fields by the same names (``start_s``, ``start_frame``,
         ``label``, ``confidence``, ``unknown``, ``repetitions`` and ``count``) as they stand;
-        ``settled_s``, the time up to which it is settled (``settled_frame``). ``fps``: the
-        stream's frames per second (InputError naming it when not a number > 0)."""
+        ``settled_s``, the time up to which it is settled (``settled_frame``); while the
+        person holds still, ``still_s``, since when (``still_frame``; the key is left out
+        while they move: those lines are as before). ``fps``: the stream's frames per second
+        (InputError naming it when not a number > 0)."""
         fields = span_fields(self.start_frame, self.frame, self.label, self.confidence, fps)
+        still = {} if self.still_frame is None else {"still_s": round(self.still_frame / fps, 3)}
         return {
             "event": "progress",
             "t_s": fields["end_s"],
@@ -184,6 +191,7 @@ class LiveProgress:
             "repetitions": self.repetitions,
             "count": self.repetitions,  # as a finished segment's line names it too
             "settled_s": round(self.settled_frame / fps, 3),
+            **still,
         }
 
 
@@ -541,6 +549,9 @@ class LiveSegmenter:
         self.image_before: np.ndarray | None = None  # the last frame's hip and torso (px)
         self.jumps: list[int] = []  # the frames, still kept, where the pose jumped
         self.jumped = False  # the pose jumped at the last frame pushed
+        self.still_from: int | None = None  # the first frame of the latest fixed windows
+        # that are each too still for any activity, in a row (the person holds still since
+        # about then: :meth:`progress`); None when the latest moves or shows nobody
 
     def _penalty(self) -> float:
         """The log-odds a change costs: :data:`MIN_SEGMENT_S` of hops at :data:`SWITCH_ODDS`."""
@@ -750,7 +761,12 @@ class LiveSegmenter:
     def _decide(self, n: int) -> list[LiveSegment]:
         vote = self._vote(n)
         self.latest_votes = [*self.latest_votes[1 - self.cover :], vote]
-        self.windows.append((n - self.window, n, vote[1], self._last_judged(n - self.window, n)))
+        judged = self._last_judged(n - self.window, n)
+        self.windows.append((n - self.window, n, vote[1], judged))
+        if judged is None or not judged.still:
+            self.still_from = None
+        elif self.still_from is None:
+            self.still_from = n - self.window
         if self.hops % self.span_every == 0:  # spans end where offline's do: a window, then
             self._repetition_windows(n)  # every SPAN_HOP_S
         self.hops += 1
@@ -1757,9 +1773,13 @@ class LiveSegmenter:
         end by the earliest frame a cut of the segment can still fall on, less the longest
         window (:meth:`_settled_until`, what the tally takes as final): the frames after it
         may yet be cut off into another segment, so its finished line counts at least as
-        many. None before the decoders have settled the stream's first hops (some 9 s of
-        stream: no segment's label is known yet), and once the stream has ended
-        (:meth:`finish` gave the last segment)."""
+        many; while the person holds still, since when (``still_frame``): the decoders
+        settle nothing over a hold (no window of it votes for any activity), so neither the
+        label nor the count moves on until the movement comes back (or
+        :data:`MAX_UNSETTLED_S` has passed), and the line says why. None before the
+        decoders have settled the stream's first hops (some 9 s of stream: no segment's
+        label is known yet), and once the stream has ended (:meth:`finish` gave the last
+        segment)."""
         if self.ended:
             return None
         now = self.current()
@@ -1775,7 +1795,7 @@ class LiveSegmenter:
         count = max(0, now.repetitions - later)
         confidence = self._confidence(self.seen)
         return LiveProgress(start, self.n, label, confidence, count, settled,
-                            unknown_reason(label, ""))  # fmt: skip
+                            unknown_reason(label, ""), self.still_from)  # fmt: skip
 
     def finish(self) -> list[LiveSegment]:
         """The segments not yet finished, at the end of the stream (the last one ends there);

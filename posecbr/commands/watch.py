@@ -26,7 +26,8 @@ last verdict is drawn on the frames, and the end lists every verdict on stderr. 
 ``--progress SECONDS``, every SECONDS of the stream while a segment is open, one more line on
 the segment in progress (``"event": "progress"``, :meth:`cbr.live.LiveProgress.to_dict`: its
 label as the decoders have settled it, its repetitions that end before any frame it can
-still be cut on; provisional, never more than its finished line will say), and every line
+still be cut on; provisional, never more than its finished line will say; while the person
+holds still, since when, ``still_s``: over a hold the decoders settle nothing), and every line
 says which it is first (``"event": "segment"``, ``"repetition"``); without it the lines are
 as they were. At
 the end the latency from a frame's coming to having its rolling label (drawn on the frame,
@@ -150,7 +151,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         metavar="SECONDS",
         help="also print, every SECONDS of the stream's time while a segment is open, one"
         ' JSON line {"event": "progress", ...}: its label and the repetitions settled so far'
-        " (provisional: never more than its finished line says); every line then carries"
+        " (provisional: never more than its finished line says; still_s while the person"
+        " holds still); every line then carries"
         ' "event" (segment, repetition, progress) (default: finished segments alone)',
     )
     add_k_option(
