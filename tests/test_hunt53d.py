@@ -4,18 +4,28 @@
   settle nothing (no window of the hold votes for any activity), so the progress lines'
   label and count stand still though time goes on; each line now says the person holds
   still, and since when (``"still_s"``), and still says no more than the finished line.
+- A live source's rate measured over a window with a drop-out in it (a pause after which
+  the stream resumed at its own pace, its frames lost) is no longer read low: the pause is
+  left out, as a stall's is, where a burst's (frames held up, then read at once) still
+  counts (:func:`posecbr.commands.watch._frame_rate`).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from features.errors import DataError
 from features.readers.asfamc import read_asf_amc
+from posecbr.commands.watch import BURST_S, CHANGE_WINDOW_S, Watcher, _frame_rate
 from tests.once import made_once
+from tests.test_hunt49e import _frame
+from tests.test_hunt52y import _Segmenter
 from tests.test_watch import _cmu_13_29_windows
 
 FPS = 10.0
@@ -80,3 +90,52 @@ def test_progress_lines_say_the_person_holds_still_and_no_more_than_the_finished
     assert len(held) >= 4 and moving  # 12 to 16 s; 9 and 10 s
     assert all(line["still_s"] <= hold / FPS for line in held)
     assert all("still_s" not in line for line in moving)
+
+
+@pytest.mark.parametrize("pause_s", [0.3, 0.45])
+def test_a_drop_out_is_left_out_of_the_rate_and_a_bursts_pause_is_not(pause_s: float) -> None:
+    """60 fps for half a second, a pause, then 60 fps again for 0.3 s (the camera's frames
+    of the pause lost): the rate over the latest frames (as a change of rate is measured,
+    the longest interval counted half a second) is 1 / the median interval, 60 fps, the
+    pause left out (before, one no longer than half a second was counted: 49 intervals
+    over 0.8 s and the pause, 0.3 s read 44.5 fps, 0.45 s 39.2 fps; a longer one was left
+    out as a stall's, as it still is). A burst is not a drop-out: 30 fps for half a second,
+    then the ten frames taken in the next 0.3 s read at once (1 ms apart) when the last was
+    taken, then 30 fps: 30 fps, the pause counted with the frames read at once (hand: 30
+    intervals in 1 s)."""
+    dropped = np.concatenate([np.arange(31) / 60.0, 0.5 + pause_s + np.arange(19) / 60.0])
+    gaps = np.diff(dropped)
+    assert 1.0 / np.median(gaps) == pytest.approx(60.0)
+    assert _frame_rate(dropped.tolist(), CHANGE_WINDOW_S, BURST_S) == pytest.approx(60.0)
+    taken = np.arange(31) / 30.0
+    came = taken.copy()
+    came[16:26] = taken[25] + 0.001 * np.arange(10)  # 0.5 s, then 0.33 s without a frame
+    assert came[16] - came[15] == pytest.approx(0.3 + 1 / 30.0)
+    assert np.all(np.diff(came) > 0) and came[-1] - came[0] == pytest.approx(1.0)
+    assert _frame_rate(came.tolist(), CHANGE_WINDOW_S, BURST_S) == pytest.approx(30.0)
+
+
+def test_a_rise_with_a_drop_out_before_the_end_is_watched_again_at_its_rate(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """tests/test_hunt52y.py's stream: 15 fps for 2 s (a burst at 1.6 s), then 60 fps, the
+    frames taken within 2.55-2.87 s lost (a drop-out, the two frames after it 1/60 s
+    apart), the stream ending at 2.88 s. The rise is watched again at the camera's new
+    rate, 60 fps (hand: the frames' interval after the rise, 1/60 s); before, at 37.5 fps
+    (the frames of the latest 0.8 s over their span, the pause in it: 30 intervals in 0.8
+    s)."""
+    monkeypatch.setattr("cbr.live.LiveSegmenter", _Segmenter)
+    taken = np.concatenate([np.arange(30) / 15.0, 2.0 + np.arange(54) / 60.0])
+    came = taken.copy()
+    came[20:25] = taken[24]
+    sent = ~((taken > 2.55) & (taken < 2.0 + 52 / 60.0 - 1e-9))
+    frames = []
+    for j, i in enumerate(np.flatnonzero(sent)):
+        frame = _frame(j, came[i], taken[i])
+        frame.read_at, frame.last = 0.0, False
+        frames.append(frame)
+    args = argparse.Namespace(source="0", max_frames=None, out=None, show=False, k=1)
+    watcher = Watcher(None, None, args, None)
+    with pytest.raises(DataError, match="the stream ended after"):
+        watcher.follow(iter(frames), False, threading.Event())
+    assert watcher.live.fps == pytest.approx(60.0)
