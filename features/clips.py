@@ -16,12 +16,16 @@ from features.fileio import as_path, file_head, path_exists, picture_words
 from features.formats import SHOWN_VIDEO_SUFFIXES
 from features.formats import VIDEO_SUFFIXES as VIDEO_SUFFIX_ORDER
 
+from .handedness import METADATA_KEY as HANDEDNESS_KEY
 from .handedness import right_handed
 from .poses import EXTRACTION_VERSION, PoseSequence, load_pose, load_pose_arrays
 from .readers.asfamc import hdm05_metadata, read_asf_amc
 from .readers.bvh import read_bvh
 from .readers.uiprmd import read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_sensor
 
+#: the columns reading a clip may add from its frames, to some clips and not to others: a
+#: recording found written left-handed says so (:func:`features.handedness.right_handed`)
+FRAME_COLUMNS = frozenset({HANDEDNESS_KEY})
 #: a file named as a clip with one of these suffixes is read as a video (``.ts`` among them)
 VIDEO_SUFFIXES = frozenset(SHOWN_VIDEO_SUFFIXES)
 POSE_SUFFIXES = frozenset({".npz"})
@@ -43,14 +47,16 @@ class Clip:
 @dataclass(frozen=True)
 class ListedClip:
     """A clip as its dataset's listing tells it, its frames not decoded: its file's name,
-    label, subject and extras, as reading it gives them; ``complete``: the extras are all
-    it will have (a pose file's metadata read alone; another reader adds its own)."""
+    label, subject and extras, as reading it gives them; ``adds``: the columns reading it
+    adds to these extras (none to a pose file's metadata read alone; a reader's own to a
+    UI-PRMD or HDM05 file's name, :data:`features.readers.uiprmd.UIPRMD_COLUMNS`), None when
+    only reading it tells. Reading any clip may also add one of :data:`FRAME_COLUMNS`."""
 
     name: str
     label: str
     subject: str | None
     extras: dict[str, Any]
-    complete: bool
+    adds: frozenset[str] | None
 
 
 def clip_suffix(path: Path) -> str:

@@ -58,8 +58,14 @@ from .label_tracks import (
 )
 from .labels_csv import check_rows_apart, read_labels_csv
 from .poses import PoseSequence, loaded_metadata, pose_file_metadata
-from .readers.asfamc import hdm05_metadata, read_asf_amc
-from .readers.uiprmd import UIPRMD_MOVEMENTS, read_uiprmd_kinect, read_uiprmd_vicon, uiprmd_metadata
+from .readers.asfamc import ASF_AMC_COLUMNS, hdm05_metadata, read_asf_amc
+from .readers.uiprmd import (
+    UIPRMD_COLUMNS,
+    UIPRMD_MOVEMENTS,
+    read_uiprmd_kinect,
+    read_uiprmd_vicon,
+    uiprmd_metadata,
+)
 from .stretches import (
     check_fits_before_read,
     check_track,
@@ -86,6 +92,8 @@ class _Entry:
     # frame rate that replaces the file's (None: the file's own)
     check: Callable[[float | None], None] | None = None
     track: LabelTrack | None = None  # a recording labelled over time: its label file
+    # the columns its reader adds to those its name tells (None: only reading it tells)
+    adds: frozenset[str] | None = None
 
 
 def _uiprmd_root(path: Path) -> Path | None:
@@ -219,7 +227,15 @@ def _uiprmd_entries(path: Path, sensor: str) -> list[_Entry]:
             "sensor": sensor,
         }
         entries.append(
-            _Entry(lambda f=f: reader(f), label, str(meta["subject"]), extras, f.name, f)  # type: ignore[misc]
+            _Entry(
+                lambda f=f: reader(f),  # type: ignore[misc]
+                label,
+                str(meta["subject"]),
+                extras,
+                f.name,
+                f,
+                adds=UIPRMD_COLUMNS | set(meta),
+            )
         )
     entries.sort(
         key=lambda e: (
@@ -249,6 +265,7 @@ def _asf_amc_entries(path: Path) -> list[_Entry]:
                 extras,
                 amc.name,
                 amc,
+                adds=ASF_AMC_COLUMNS | set(meta),
             )
         )
     return entries
@@ -466,7 +483,7 @@ class DatasetEntry:
         label, subject = str(label), None if subject is None else str(subject)
         if not self._keep(label, subject, extras):
             return ()
-        return (ListedClip(e.name, label, subject, extras, pose_file),)
+        return (ListedClip(e.name, label, subject, extras, frozenset() if pose_file else e.adds),)
 
     def read(self) -> list[Clip]:
         """The clips it holds (decoded, labelled: one, or one per labelled stretch of a

@@ -17,7 +17,7 @@ from features.targets import clip_target_of
 def _listed(counts: dict[str, int]) -> list[ListedClip]:
     """Pose files of no subject, ``counts[label]`` of each label, as the listing tells them."""
     return [
-        ListedClip(f"{label}{i}.npz", label, None, {}, complete=True)
+        ListedClip(f"{label}{i}.npz", label, None, {}, adds=frozenset())
         for label, n in counts.items()
         for i in range(n)
     ]

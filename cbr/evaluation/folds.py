@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from features.clips import ListedClip
+from features.clips import FRAME_COLUMNS, ListedClip
 from features.errors import ConfigError, DataError
 from features.targets import clip_target_of, column_of
 from features.text import counted
@@ -135,22 +135,22 @@ def check_k(settings: CompareSettings, folds: np.ndarray) -> None:
 def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source: str) -> bool:
     """Refuse, from the clips as their dataset lists them (:class:`ListedClip`, nothing decoded),
     what :func:`cbr.evaluation.compare.run_compare` would refuse once every clip is read, in its
-    words: a target no clip has a value of (when only decoding can add one, as another reader than
-    the pose files' can, only the listing's ``complete`` clips tell), fewer than two classes of two
-    clips, a ``k`` above the training clips of the smallest fold. The clips a read leaves out (no
-    person shown, too short) only make classes smaller, but may leave more folds (a class of two
-    then gone no longer caps them): ``k`` is refused here only above what a fold of the clips
-    read could train on (:func:`_most_trained`). A refusal here is one the read clips get, the
-    counts it names those of the clips listed. Returns whether the listing told all it checks
-    (False: a clip's target or group only a read can tell)."""
+    words: a target no clip has a value of (nor can be given by reading it: :func:`_may_add`),
+    fewer than two classes of two clips, a ``k`` above the training clips of the smallest fold.
+    The clips a read leaves out (no person shown, too short) only make classes smaller, but may
+    leave more folds (a class of two then gone no longer caps them): ``k`` is refused here only
+    above what a fold of the clips read could train on (:func:`_most_trained`). A refusal here
+    is one the read clips get, the counts it names those of the clips listed. Returns whether
+    the listing told all it checks (False: a clip's target or group only a read can tell)."""
     if not listed:
         return True
-    values = [clip_target_of(c.label, c.subject, c.extras, settings.target) for c in listed]
+    target = settings.target
+    values = [clip_target_of(c.label, c.subject, c.extras, target) for c in listed]
     if all(v is None for v in values):
-        if all(c.complete for c in listed):
-            columns = {k for c in listed for k in c.extras}
+        if not any(_may_add(c, target) for c in listed):
+            columns = {k for c in listed for k in (*c.extras, *(c.adds or ()))}
             n = len(listed)
-            raise no_target_error(n, n, listed[0].name, columns, settings.target, source)
+            raise no_target_error(n, n, listed[0].name, columns, target, source)
         return False
     if any(v is None for v in values):
         return False  # which of them a read leaves out, or gives a value, only reading tells
@@ -173,6 +173,16 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     if int(settings.k) > _most_trained(scheme, folds, int(settings.folds)):
         check_k(settings, folds)
     return True
+
+
+def _may_add(clip: ListedClip, column: str) -> bool:
+    """Whether reading ``clip`` may give it a value of ``column`` (named in any case) that its
+    listing does not: a column its reader adds (:attr:`ListedClip.adds`; any when only reading
+    it tells) or finds in its frames (:data:`features.clips.FRAME_COLUMNS`)."""
+    if clip.adds is None:
+        return True
+    low = column.strip().lower()
+    return any(k.strip().lower() == low for k in (*clip.adds, *FRAME_COLUMNS))
 
 
 def _most_trained(scheme: str, folds: np.ndarray, k_folds: int) -> int:

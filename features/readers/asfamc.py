@@ -657,6 +657,11 @@ def amc_frame_rate(path: Path) -> tuple[float, str]:
     return ACCLAIM_FPS, f"assumed: AMC files carry no rate, CMU and HDM05 record at {ACCLAIM_FPS:g}"
 
 
+#: the columns :func:`read_asf_amc` gives every clip's metadata besides those its file's name
+#: gives (:func:`hdm05_metadata`): what a target can be, told before a clip is read
+ASF_AMC_COLUMNS = frozenset({"asf", "fps_source"})
+
+
 def hdm05_metadata(path: Path) -> dict[str, object]:
     """label/subject/take from an HDM05 name ``HDM_<actor>_<action>_<take>_<fps>.amc``."""
     m = re.match(r"^HDM_([a-z]+)_(.+)_(\d+)_(\d+)$", path.stem, flags=re.IGNORECASE)

@@ -253,6 +253,12 @@ UIPRMD_MOVEMENTS: dict[str, str] = {
 """The label of each UI-PRMD movement code."""
 
 
+#: the columns :func:`read_uiprmd_kinect` and :func:`read_uiprmd_vicon` give every clip's
+#: metadata besides those its file's name gives (:func:`uiprmd_metadata`): what a target can be,
+#: told before a clip is read
+UIPRMD_COLUMNS = frozenset({"dataset", "sensor", "fps_source"})
+
+
 def uiprmd_metadata(path: Path) -> dict[str, object]:
     """label (the movement's name, :data:`UIPRMD_MOVEMENTS`; the code when unknown),
     movement/subject/episode/correct from a UI-PRMD file name (empty when it does not fit)."""
