@@ -1,7 +1,9 @@
 """compare's refusals from the listing (hunts 52x, 52rv) reach raw UI-PRMD and HDM05 folders: a
 ``--target`` neither the file names nor the reader can give is refused before any clip is
-decoded (it was refused once every clip was read, in the same words). Folders of a few real
-files, linked."""
+decoded (it was refused once every clip was read, in the same words); and k-fold's refusal of
+a group's class of a single clip is left to the read, which may leave that clip out (too
+short): it was refused from the listing though the clips read could be cross-validated.
+Folders of a few real files, linked (one cut short)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,8 @@ from pathlib import Path
 import pytest
 
 import features.datasets
-from cbr.evaluation.folds import check_listed
+from cbr.evaluation.data import prepare
+from cbr.evaluation.folds import check_listed, make_folds
 from cbr.evaluation.settings import CompareSettings
 from features.datasets import dataset_entries
 from posecbr.cli import main
@@ -99,4 +102,37 @@ def test_target_no_raw_clip_can_have_is_refused_before_any_clip_is_decoded(
         f" {first}); columns available: {columns}\n"
     )
     assert decoded == []
+    assert not out.exists()
+
+
+def test_class_of_one_clip_in_a_group_is_left_to_the_read(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # one subject: k-fold over clips, stratified by correct within each movement. Deep squat
+    # correct and incorrect twice each, hurdle step correct once: a class of a single clip in
+    # its group, which k-fold cannot stratify
+    clips = [("m01_s01_e01", True), ("m01_s01_e02", True), ("m01_s01_e01", False),
+             ("m01_s01_e02", False), ("m02_s01_e01", True)]  # fmt: skip
+    settings = CompareSettings(target="correct", k=1)
+    cut = _uiprmd(shared_data, tmp_path / "cut", clips, short="m02_s01_e01")
+    entries = dataset_entries(cut)
+    listed = [c for e in entries for c in e.listed() or ()]
+    assert len(listed) == 5
+    # the hurdle step cut to 0.2 s: the read leaves it out, and the deep squats' 2 x 2 clips
+    # are cross-validated in 2 folds (the smallest class's clips), each class in both
+    assert check_listed(listed, settings, str(cut)) is False
+    data = prepare([c for e in entries for c in e.read()], settings, str(cut))
+    scheme, folds, _ = make_folds(data, settings)
+    assert scheme == "kfold"
+    assert sorted(zip(folds.tolist(), data.y.tolist(), strict=True)) == [
+        (0, "correct"), (0, "incorrect"), (1, "correct"), (1, "incorrect")]  # fmt: skip
+    # read whole, it stays, and the read refuses it: one line, nothing written
+    whole = _uiprmd(shared_data, tmp_path / "whole", clips)
+    out = tmp_path / "out"
+    args = ["compare", str(whole), "--target", "correct", "--out", str(out)]
+    assert main(args) == 1
+    assert capsys.readouterr().err == (
+        "posecbr compare: error: --cv: a class has a single clip in some group; stratified"
+        " k-fold (--cv kfold) is impossible\n"
+    )
     assert not out.exists()

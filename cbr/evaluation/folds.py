@@ -139,9 +139,11 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     fewer than two classes of two clips, a ``k`` above the training clips of the smallest fold.
     The clips a read leaves out (no person shown, too short) only make classes smaller, but may
     leave more folds (a class of two then gone no longer caps them): ``k`` is refused here only
-    above what a fold of the clips read could train on (:func:`_most_trained`). A refusal here
-    is one the read clips get, the counts it names those of the clips listed. Returns whether
-    the listing told all it checks (False: a clip's target or group only a read can tell)."""
+    above what a fold of the clips read could train on (:func:`_most_trained`); and may take a
+    group's class of a single clip away with its clip, so k-fold's refusal of one is left to the
+    read. A refusal here is one the read clips get, the counts it names those of the clips
+    listed. Returns whether the listing told all it checks (False: a clip's target or group only
+    a read can tell, or a group's class of a single clip)."""
     if not listed:
         return True
     target = settings.target
@@ -168,8 +170,11 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
         raise refused
     kept = np.array([counts[v] >= 2 for v in y])
     subjects = [c.subject for c, keep in zip(listed, kept, strict=True) if keep]
-    scheme, folds, _ = fold_numbers(y[kept], subjects, None if within is None else within[kept],
-                                    settings)  # fmt: skip
+    groups_kept = None if within is None else within[kept]
+    try:
+        scheme, folds, _ = fold_numbers(y[kept], subjects, groups_kept, settings)
+    except DataError:  # k-fold over a group's class of a single clip listed: the read may
+        return False  # leave that clip out (no person shown, too short), and the class with it
     if int(settings.k) > _most_trained(scheme, folds, int(settings.folds)):
         check_k(settings, folds)
     return True
