@@ -48,9 +48,10 @@ class Clip:
 class ListedClip:
     """A clip as its dataset's listing tells it, its frames not decoded: its file's name,
     label, subject and extras, as reading it gives them; ``adds``: the columns reading it
-    adds to these extras (none to a pose file's metadata read alone; a reader's own to a
-    UI-PRMD or HDM05 file's name, :data:`features.readers.uiprmd.UIPRMD_COLUMNS`), None when
-    only reading it tells. Reading any clip may also add one of :data:`FRAME_COLUMNS`."""
+    adds to these extras (none to a pose file's metadata read alone; a reader's own to what a
+    UI-PRMD file's or an AMC take's name tells, :data:`features.readers.uiprmd.UIPRMD_COLUMNS`,
+    :data:`features.readers.asfamc.ASF_AMC_COLUMNS`), None when only reading it tells.
+    Reading any clip may also add one of :data:`FRAME_COLUMNS`."""
 
     name: str
     label: str

@@ -462,7 +462,8 @@ class DatasetEntry:
         extras as :meth:`read` gives them (a pose file's metadata read alone; not read
         without ``metadata``), none when it fails the filters; None when only decoding (or
         the metadata not read) tells its label or subject (a recording labelled over time, a
-        file other than a pose file its listing gives neither)."""
+        file other than a pose file its listing gives neither, unless its reader gives none
+        either: a CMU take's subject)."""
         e = self.entry
         if e.pieces is not None:
             return None
@@ -477,7 +478,8 @@ class DatasetEntry:
         meta.pop("frame_offset", None)
         label = e.label if e.label is not None else meta_label
         subject = e.subject if e.subject is not None else meta_subject
-        if label is None or (subject is None and not pose_file):
+        told = e.adds is not None and "subject" not in e.adds  # none a read can give
+        if label is None or (subject is None and not pose_file and not told):
             return None
         extras = {**_unshadowed(meta, e.extras), **e.extras}
         label, subject = str(label), None if subject is None else str(subject)

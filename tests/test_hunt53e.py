@@ -1,5 +1,5 @@
-"""compare's refusals from the listing (hunts 52x, 52rv) reach raw UI-PRMD and HDM05 folders: a
-``--target`` neither the file names nor the reader can give is refused before any clip is
+"""compare's refusals from the listing (hunts 52x, 52rv) reach raw UI-PRMD, HDM05 and CMU folders:
+a ``--target`` neither the file names nor the reader can give is refused before any clip is
 decoded (it was refused once every clip was read, in the same words); and k-fold's refusal of
 a group's class of a single clip is left to the read, which may leave that clip out (too
 short): it was refused from the listing though the clips read could be cross-validated.
@@ -51,6 +51,16 @@ def _hdm05(shared: Path, root: Path) -> Path:
     return root
 
 
+def _cmu(shared: Path, root: Path) -> Path:
+    """A folder of CMU takes at ``root``, one per class folder (jog: 13_29, squat: 13_30), an
+    HDM05 skeleton beside each, linked from the real data: no subject is told."""
+    for label, take in (("jog", "13_29"), ("squat", "13_30")):
+        (root / label).mkdir(parents=True)
+        (root / label / f"{take}.amc").symlink_to(shared / "cmu-mocap6" / "amc" / f"{take}.amc")
+        (root / label / "HDM_bd.asf").symlink_to(shared / "hdm05" / "train" / "3" / "HDM_bd.asf")
+    return root
+
+
 @pytest.mark.parametrize(
     ("kind", "reader", "first", "columns", "read_only"),
     [
@@ -63,6 +73,8 @@ def _hdm05(shared: Path, root: Path) -> Path:
             "asf, dataset, fps_source, label, subject, take",
             ["asf", "FPS_source", "x_reflected"],
         ),
+        # a CMU take's name gives no column: the reader's alone
+        ("cmu", "read_asf_amc", "13_29.amc", "asf, fps_source, label, subject", ["asf"]),
         (
             "uiprmd",
             "read_uiprmd_kinect",
@@ -85,6 +97,8 @@ def test_target_no_raw_clip_can_have_is_refused_before_any_clip_is_decoded(
 ) -> None:
     if kind == "hdm05":
         data = _hdm05(shared_data, tmp_path / "data")
+    elif kind == "cmu":
+        data = _cmu(shared_data, tmp_path / "data")
     else:
         data = _uiprmd(
             shared_data, tmp_path / "data", [("m01_s01_e01", True), ("m01_s01_e01", False)]
@@ -92,6 +106,7 @@ def test_target_no_raw_clip_can_have_is_refused_before_any_clip_is_decoded(
     # the columns only the read gives (the reader's, a left-handed recording's mark), named
     # in any case, are left to it
     listed = [c for e in dataset_entries(data) for c in e.listed() or ()]
+    assert len(listed) == 2  # the listing tells each clip's label and subject
     for target in read_only:
         assert check_listed(listed, CompareSettings(target=target), str(data)) is False
     decoded = _counted(monkeypatch, features.datasets, reader)
