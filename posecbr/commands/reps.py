@@ -66,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
     seq = load_recording(args.clip, args.asf, args.fps)
     check_person(seq, "count", arms=True)  # as segment refuses it: a long one is not counted whole
     note_assumed_rates(assumed_rates([seq]))
+    result = _count(seq)
+    # how it was counted, once it was: a clip refused (shorter than one repetition can be)
+    # gets its one line alone, not "counted from the arms alone" before it
     note_low_rate(seq.source, seq.fps, seq.confidence is not None)
     if arms_alone(seq):
         print(
@@ -73,7 +76,6 @@ def run(args: argparse.Namespace) -> int:
             " from the arms alone",
             file=sys.stderr,
         )
-    result = _count(seq)
     if result.partial:
         print(
             f"note: {shown(args.clip)}: no whole repetition: the clip starts or ends part-way"
