@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from features.body import mirror_source, moves_left_more, torso_share
+from features.body import mirror_source, moves_left_more, no_torso, torso_share
 from features.derived import forget, is_cached
 from features.errors import InputError
 from features.label_tracks import assumed_rate
@@ -57,7 +57,10 @@ class DescribedClip:
     clip, what tells a copy of a clip from another clip described alike ("" when unknown);
     rate: the frame rate its file's reader assumed and where from
     (:func:`features.label_tracks.assumed_rate`: an AMC file carries none), None when read
-    from the file or given, for the command to say (a library prints nothing).
+    from the file or given, for the command to say (a library prints nothing); no_torso: of
+    a clip no frame of which shows the torso, :func:`features.body.no_torso`'s words when it
+    shows some of the torso's joints ("shows no torso (no frame shows its left hip, right
+    hip)": the hips out of view), "" otherwise, for the command to say it, not "no person".
     """
 
     values: np.ndarray
@@ -77,6 +80,7 @@ class DescribedClip:
     columns: str = ""
     poses: str = ""
     rate: tuple[float, str] | None = None
+    no_torso: str = ""
 
     @property
     def mirror_source(self) -> str:
@@ -99,7 +103,8 @@ def describe_clip(
             return DescribedClip(empty, None, None, empty.astype(bool), share,
                                  *_provenance(seq), duration_s=seq.duration_s,
                                  columns=columns_key(candidates),
-                                 poses=poses_digest(seq), rate=assumed_fps(seq))  # fmt: skip
+                                 poses=poses_digest(seq), rate=assumed_fps(seq),
+                                 no_torso=no_torso(seq) or "")  # fmt: skip
         plain = candidates if candidates.side == "as_recorded" else _as_recorded(candidates)
         # a long clip is described a piece at a time (cbr.long_clip): problem, mirror image,
         # favoured side and available columns, none of them over the whole clip at once
@@ -224,7 +229,8 @@ def describe_case(seq: PoseSequence, casebase: CaseBase) -> DescribedClip:
         values = casebase.problem_of(seq).values if share > 0.0 else np.zeros(0)
         return DescribedClip(values, None, None, np.zeros(0, dtype=bool), share,
                              *_provenance(seq), duration_s=seq.duration_s,
-                             poses=poses_digest(seq), rate=assumed_fps(seq))  # fmt: skip
+                             poses=poses_digest(seq), rate=assumed_fps(seq),
+                             no_torso="" if share > 0.0 else no_torso(seq) or "")  # fmt: skip
     finally:
         if not keep:
             forget(seq)

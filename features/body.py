@@ -366,11 +366,19 @@ def no_person(seq: PoseSequence) -> str:
             f"shows no person (its shoulders or hips lie within {MIN_LINK_M * 1e6:g} µm of each"
             " other in every frame: positions must be metres)"
         )
+    return no_torso(seq) or "shows no person (no frame with a torso)"
+
+
+def no_torso(seq: PoseSequence) -> str | None:
+    """How ``seq`` shows no torso when some :data:`TORSO_JOINTS` are missing in every frame
+    and the others are seen in some (the hips out of view below a close-up's bottom edge, or
+    not recorded), naming them ("shows no torso (no frame shows its left hip, right hip)");
+    None when every one is missing throughout, or none is."""
     missing = torso_missing(seq)
     if 0 < len(missing) < len(TORSO_JOINTS):  # the rest seen: out of view, or not recorded
         named = ", ".join(j.replace("_", " ") for j in missing)
         return f"shows no torso (no frame shows its {named})"
-    return "shows no person (no frame with a torso)"
+    return None
 
 
 def torso_missing(seq: PoseSequence) -> list[str]:

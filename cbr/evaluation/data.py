@@ -117,22 +117,27 @@ def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
     """The clips that show a person (some frame shows the torso) for as long as one movement
     can last, and notes naming the others (left out for every method alike: a clip nothing
     can be computed from failed the methods that describe clips, and the comparison crowned
-    the others; a clip of a frame or two is what ``classify`` calls unclassifiable)."""
+    the others; a clip of a frame or two is what ``classify`` calls unclassifiable). One that
+    shows some of the torso's joints, the others in no frame, is said to show no torso,
+    naming them (:func:`features.body.no_torso`), as ``classify`` and ``segment`` say it: a
+    clip of the shoulders and arms, the hips out of view, was said to show no person."""
+    from features.body import no_torso
     from features.repetitions import MIN_PERIOD_S
 
     from ..estimator import unusable
 
     nobody = set(unusable([c.seq for c in clips]))
     short = {i for i, c in enumerate(clips) if c.seq.duration_s < MIN_PERIOD_S} - nobody
-    verb = "shows" if len(nobody) == 1 else "show"
-    notes = [
-        _left_out(clips, gone, why)
-        for gone, why in (
-            (nobody, f"that {verb} no person"),
-            (short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"),
-        )
-        if gone
+    why_none: dict[str, set[int]] = {}
+    for i in sorted(nobody):
+        why_none.setdefault(no_torso(clips[i].seq) or "shows no person", set()).add(i)
+    gone = [
+        (ids, "that " + (why if len(ids) == 1 else why.replace("shows ", "show ", 1)))
+        for why, ids in why_none.items()
     ]
+    if short:
+        gone.append((short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"))
+    notes = [_left_out(clips, ids, why) for ids, why in gone]
     return [c for i, c in enumerate(clips) if i not in nobody | short], notes
 
 

@@ -11,7 +11,7 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -1037,6 +1037,8 @@ def run(args: argparse.Namespace) -> int:
         raise
     if not clips:
         raise _no_clips(args)
+    # why each clip that shows no torso is skipped, in the order training names them
+    args.no_torso = [c.no_torso for c in clips if c.torso_share == 0.0]
     _note_assumed_rates(args, clips)
     if args.append:
         result = append_described(args.db, args.name, clips, solutions, plan, uid)
@@ -1064,30 +1066,41 @@ def _note_assumed_rates(args: argparse.Namespace, clips: list[Any]) -> None:
 
 
 def _skipped(
-    nobody: list[str], short: list[str], split: str, kept_whole: Collection[str] = ()
+    nobody: list[str],
+    short: list[str],
+    split: str,
+    kept_whole: Collection[str] = (),
+    no_torso: Sequence[str] = (),
 ) -> str:
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces), and those shorter than one movement can be
     (:func:`cbr.training.usable` names them with their length). Cut into repetitions, a
     piece that shows no person is a clip kept whole: repetitions are found where the person
     is seen; so is a short one from a clip in ``kept_whole`` (a clip shorter than one
-    repetition can be has none: it was said to be "kept whole", not a repetition)."""
+    repetition can be has none: it was said to be "kept whole", not a repetition).
+    ``no_torso``: each of ``nobody``'s :attr:`cbr.described.DescribedClip.no_torso`, in
+    order: those that show some of the torso's joints (the hips out of view) are said to
+    show no torso, naming the joints, as ``classify`` and ``segment`` say it (they were said
+    to show no person)."""
     from features.repetitions import MIN_PERIOD_S
 
     whole = [n for n in short if n.rsplit(" (lasts ", 1)[0] in kept_whole]
     cut = [n for n in short if n not in whole]
     shorter = f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
+    why_none: dict[str, list[str]] = {}
+    reasons = no_torso if len(no_torso) == len(nobody) else [""] * len(nobody)
+    for name, why in zip(nobody, reasons, strict=True):
+        why_none.setdefault(why or "shows no person", []).append(name)
+    pieces = "clips" if split == "repetitions" else split
     lines = [
-        _listed(names, kind, why)
-        for names, kind, why in (
-            (
-                nobody,
-                "clips" if split == "repetitions" else split,
-                "that shows no person" if len(nobody) == 1 else "that show no person",
-            ),
-            (whole, "clips", shorter),
-            (cut, split, shorter),
+        _listed(
+            names, pieces, "that " + (why if len(names) == 1 else why.replace("shows ", "show ", 1))
         )
+        for why, names in why_none.items()
+    ]
+    lines += [
+        _listed(names, kind, why)
+        for names, kind, why in ((whole, "clips", shorter), (cut, split, shorter))
         if names
     ]
     return "\n".join(lines)
@@ -1326,7 +1339,9 @@ def _report(args: argparse.Namespace, result: Any) -> None:
     from features.text import shown
 
     if result.skipped or result.too_short:
-        print(_skipped(result.skipped, result.too_short, args.split, args.kept_whole))
+        print(
+            _skipped(result.skipped, result.too_short, args.split, args.kept_whole, args.no_torso)
+        )
     lost = _no_case(args, result)
     if lost:
         print(_lost(lost, class_noun(args.target, len(lost))))
