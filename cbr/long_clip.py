@@ -204,11 +204,12 @@ def resampled_columns(
     length: int,
     chunk: int,
     mirror: bool = False,
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """``(length, n_columns)``: the columns of ``plan`` for ``seq`` (its mirror image with
     ``mirror``), gaps filled along time (a column never defined: ``fills``), resampled to
     ``length`` frames; computed ``chunk`` frames at a time. Equal to
-    ``resample(fill_nan_time(columns), length)`` of the whole clip's columns."""
+    ``resample(fill_nan_time(columns), length)`` of the whole clip's columns. With it,
+    ``(n_columns,)`` bool: the columns never defined in any frame (their values are fills)."""
     from .problem import resample_points
 
     i, w = resample_points(seq.n_frames, length)
@@ -223,7 +224,7 @@ def resampled_columns(
     x = sampled.values()
     lo, hi = x[np.searchsorted(at, i)], x[np.searchsorted(at, i + 1)]
     out: np.ndarray = lo * (1.0 - w) + hi * w
-    return out
+    return out, sampled.never
 
 
 class SampledColumns:
@@ -299,6 +300,12 @@ class SampledColumns:
         hold the last defined value; a column never defined is its fill."""
         rows, cols = np.nonzero(self.waiting)
         self.value[rows, cols] = self.prev_v[rows, cols]
-        never = self.last_t < 0
+        never = self.never
         self.value[:, never] = self.fills[never]
         return self.value
+
+    @property
+    def never(self) -> np.ndarray:
+        """``(n,)`` bool: the columns no frame fed so far defines."""
+        never: np.ndarray = self.last_t < 0
+        return never

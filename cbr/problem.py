@@ -89,7 +89,8 @@ class FeatureConfig:
       :func:`resolve_config`.
     min_available: at build time, keep a state when it is available (not all-NaN) in at least
       this fraction of the training clips.
-    fill: confidence given to a selected state that is unavailable in a whole clip.
+    fill: confidence given to a selected state that is unavailable in a whole clip (a fill,
+      not a measurement: left out of the clip's distances, :meth:`Problem.measured`).
     qmp_part: ``"binary"`` (detected / not) or ``"values"`` (scored QMPs) at the QMP level.
     angles: also use the named joint angles (``"angle:left_knee"`` columns, radians / pi).
     summary: per-column statistics (mean, lowest, highest, variation) instead of the sequence.
@@ -214,7 +215,8 @@ class Problem:
     ``(n_features,)`` (QMP vector); ``names`` machine names and ``words`` human words of the
     feature columns (so explanations can cite them); ``unseen``: the features (names before
     any ``@`` statistic) the clip never showed, whose values are fills, not measurements
-    (explanations cite no value of them; known for clips computed whole)."""
+    (explanations cite no value of them, and retrieval leaves them out of the distance:
+    :meth:`measured`)."""
 
     values: np.ndarray
     names: tuple[str, ...]
@@ -222,6 +224,34 @@ class Problem:
     level: Level
     mirrored: bool = False
     unseen: frozenset[str] = frozenset()
+
+    def measured(self) -> np.ndarray | None:
+        """``(values.size,)`` bool over the flattened values (a sequence frame after frame):
+        False where the value is the fill of a feature the clip never showed (``unseen``);
+        None when every value is measured, or none is (nothing to compare but the fills)."""
+        if not self.unseen:
+            return None
+        cols = _measured_columns(self.names, self.unseen)
+        if cols.all() or not cols.any():
+            return None
+        values = np.asarray(self.values)
+        if values.ndim == 2 and values.shape[1] == len(cols):
+            return np.tile(cols, values.shape[0])
+        if values.size != len(cols):
+            raise ConfigError(
+                f"the problem has {values.size} values but {len(cols)} column names", "problem"
+            )
+        return cols
+
+
+@lru_cache(maxsize=64)
+def _measured_columns(names: tuple[str, ...], unseen: frozenset[str]) -> np.ndarray:
+    """``(len(names),)`` bool, read-only: the columns ``names`` (``feature@statistic`` or
+    ``feature``) whose feature is not ``unseen``. Kept per pair: a recording's windows that
+    miss a column miss the same few."""
+    cols = np.array([n.split("@", 1)[0] not in unseen for n in names], dtype=bool)
+    cols.setflags(write=False)
+    return cols
 
 
 def warm(seq: PoseSequence, level: Level = "fluents", mirror: bool = True) -> None:
@@ -570,7 +600,8 @@ def _qmp_problem(q: QMPFeatures, config: FeatureConfig) -> Problem:
                 str(n) for n, v in zip(q.binary_names, tested, strict=True) if np.isnan(v)
             ),
         )
-    # parameters not observable in this clip (NaN) get the configured fill value
+    # parameters not observable in this clip (NaN) get the configured fill value (unseen:
+    # left out of its distances)
     raw = np.asarray(q.values, dtype=np.float64)
     vals = np.nan_to_num(raw, nan=float(config.fill))
     unseen = frozenset(str(n) for n, v in zip(q.names, raw, strict=True) if np.isnan(v))
@@ -594,9 +625,10 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
     names, words, _ = state_columns()
     plan = _column_plan(states, names, words)
     fills = _column_fills(plan, float(config.fill))
-    unseen: frozenset[str] = frozenset()  # known of a clip computed whole
     if chunk:
-        values = long_clip.resampled_columns(seq, plan, fills, int(config.length), chunk, mirror)
+        values, never = long_clip.resampled_columns(
+            seq, plan, fills, int(config.length), chunk, mirror
+        )
     else:
         planes = arm_planes(seq) if plan.arm_planes else None
         positions = body_positions(seq) if len(plan.position_cols) else None
@@ -611,7 +643,7 @@ def _fluent_problem(seq: PoseSequence, config: FeatureConfig, chunk: int, mirror
         )
         values = resample(fill_nan_time(columns, fills), int(config.length))
         never = np.isnan(columns).all(axis=0) if len(columns) else np.zeros(len(states), bool)
-        unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
+    unseen = frozenset(s for s, n in zip(states, never, strict=True) if n)
     if config.summary:
         problem = summarise(values, states, plan.words, int(config.phases), bool(config.velocity))
         return dataclasses.replace(problem, unseen=unseen)

@@ -84,6 +84,7 @@ from . import long_clip
 from .estimator_protocol import check_case_base_classifier
 from .explain import Explanation
 from .problem import FeatureConfig, warm
+from .retrieve import query_distances
 from .reuse import class_balance, vote
 from .unknown import default_judge, for_person, tell_unknown, unknown_evidence
 from .unknown_held_out import activity_codes, per_activity
@@ -342,7 +343,7 @@ def activity_distances(clf: Any, solved: Any, codes: np.ndarray | None = None) -
     cb = clf.case_base_
     if codes is None:
         codes = activity_codes(cb.labels, clf.classes_)
-    d = cb.measure.distances(cb.measure.represent_query(solved.problem.values), cb.index)
+    d = query_distances(cb, solved.problem)  # the fills of columns never shown left out
     return per_activity(d, codes, len(clf.classes_))
 
 

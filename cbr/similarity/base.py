@@ -64,6 +64,8 @@ class SimilarityMeasure:
     name: ClassVar[str] = ""
     # True for measures that align sequences (a QMP vector, one per clip, has nothing to align)
     compares_sequences: ClassVar[bool] = False
+    # True for measures whose distances_measured leaves a query's unmeasured values out
+    leaves_out: ClassVar[bool] = False
 
     def cache_kind(self, problem_shape: tuple[int, ...]) -> str | None:
         """Key under which per-case representations are cached in the store (None: don't)."""
@@ -102,6 +104,23 @@ class SimilarityMeasure:
         idx = np.array([f[0] for f in found], dtype=np.int64).reshape(len(found), kk)
         dist = np.array([f[1] for f in found], dtype=np.float64).reshape(len(found), kk)
         return idx, dist
+
+    def distances_measured(
+        self, query_rep: np.ndarray, index: Any, measured: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`distances` over the query's measured values alone: ``measured``
+        ``(problem size,)`` bool, False for a fill of a feature the query never showed
+        (:meth:`cbr.problem.Problem.measured`). A measure that can leave values out
+        (:attr:`leaves_out`) compares the rest, scaled to all of them; this default compares
+        every value, the fills too, as before the query's fills were known."""
+        del measured  # part of the plug-in interface: a measure that aligns cannot drop values
+        return self.distances(query_rep, index)
+
+    def nearest_measured(
+        self, query_rep: np.ndarray, index: Any, k: int, measured: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`nearest` by :meth:`distances_measured` (ties to the lower index)."""
+        return smallest_k(self.distances_measured(query_rep, index, measured), k)
 
     def params(self) -> dict[str, Any]:
         """The measure as data: ``{"name": ..., field: value, ...}`` (JSON-able)."""

@@ -72,7 +72,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -84,7 +84,14 @@ from .bounded_search import codes_query, nibble_knn
 from .grid_codes import PcaCodes, pca_basis, pca_codes
 from .nibbles import HAS_SHUFFLE, MAX_DIMS, NibbleCodes, nibble_codes, nibble_tables
 from .pruning import FALLBACK, PruningRecord
-from .row_kernel import all_distances, allowance_of, knn_scan, query32, select_from_products
+from .row_kernel import (
+    all_distances,
+    allowance_of,
+    knn_scan,
+    measured_distances,
+    query32,
+    select_from_products,
+)
 
 _U32 = 2.0**-24  # unit roundoff of float32
 
@@ -153,6 +160,8 @@ class Euclidean(SimilarityMeasure):
     flattened column: the measure compares ``(x - centre) * multiplier``; None: raw values.
     """
 
+    leaves_out: ClassVar[bool] = True
+
     exact: bool = False
     prune_min_cases: int = 5000
     prune_dims: int = 0
@@ -208,6 +217,31 @@ class Euclidean(SimilarityMeasure):
             return exact
         q32, q_sq = self._query(query_rep)
         return all_distances(index.rows, q32)
+
+    def distances_measured(
+        self, query_rep: np.ndarray, index: Any, measured: np.ndarray
+    ) -> np.ndarray:
+        """The distance over the query's measured columns alone, scaled to all ``D`` as
+        scikit-learn's ``nan_euclidean_distances`` scales a pair's present coordinates:
+        ``sqrt(D / m * sum over the m measured columns of (x - q)^2)``, an estimate of the
+        distance over all columns had the others differed as the measured ones do on
+        average, so it stands against distances of all columns (the case base's own, the
+        unknown judges' thresholds are calibrated on). One pass over every row (the row
+        kernel's arithmetic, :func:`cbr.similarity.row_kernel.measured_distances`): the
+        bounds of the pruned and quantized passes are over whole rows."""
+        if not isinstance(index, _EuclideanIndex):
+            index = self.build_index(np.asarray(index, dtype=np.float64))
+        _check_width(np.size(query_rep), index)
+        keep = np.asarray(measured, dtype=bool).reshape(-1)
+        _check_width(len(keep), index)
+        cols = np.flatnonzero(keep)
+        if len(cols) in (0, len(keep)):  # nothing left out, or nothing to compare but fills
+            return self.distances(query_rep, index)
+        q = np.asarray(query_rep).reshape(-1)
+        if not np.isfinite(q[cols]).all():
+            raise InputError("euclidean: the query holds NaN or inf")
+        row: np.ndarray = measured_distances(index.rows, q.astype(index.rows.dtype), cols)
+        return row
 
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
         if not isinstance(index, _EuclideanIndex) or self.exact:

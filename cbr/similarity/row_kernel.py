@@ -75,6 +75,24 @@ def all_distances(rows: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
+def measured_distances(rows: np.ndarray, q: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Distances from ``q`` ``(D,)`` to every row of ``rows`` ``(n, D)`` over the columns
+    ``cols`` ``(m,)`` alone (the query's measured ones), scaled to all ``D`` columns as
+    scikit-learn's ``nan_euclidean_distances`` scales them: ``sqrt(D / m * sum over cols of
+    (row - q)^2)``, the squares summed in float64 as :func:`_row_sq` sums them."""
+    out = np.empty(rows.shape[0])
+    scale = rows.shape[1] / cols.shape[0]
+    for i in range(rows.shape[0]):
+        s = 0.0
+        for t in range(cols.shape[0]):
+            j = cols[t]
+            d = np.float64(rows[i, j]) - np.float64(q[j])
+            s += d * d
+        out[i] = math.sqrt(scale * s)
+    return out
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
 def knn_scan(
     rows: np.ndarray, q: np.ndarray, idx: np.ndarray, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
