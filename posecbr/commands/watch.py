@@ -902,9 +902,10 @@ class Watcher:
             for segment in finished:
                 self._emit(segment)
             if self.verdicts is not None:
-                for verdict in self.verdicts.update():
-                    self._print_line(verdict.to_dict(), "repetition")
+                self._verdict_lines(self.verdicts.update())
             self._progress()
+            if self.args.out is not None:  # each verdict drawn from the frame it was due at
+                self._verdicts_judged()
             self._draw(shown_frame, absent)
 
     def _flush(self) -> None:
@@ -1052,7 +1053,21 @@ class Watcher:
             return
         from cbr.live_verdicts import RepetitionVerdicts
 
-        self.verdicts = RepetitionVerdicts(self.stored, self.live, self.verdicts)
+        self.verdicts = RepetitionVerdicts(self.stored, self.live, self.verdicts, background=True)
+
+    def _verdict_lines(self, verdicts: list[Any]) -> None:
+        """Print the lines of ``verdicts`` (:meth:`cbr.live_verdicts.RepetitionVerdicts.update`'s
+        or ``ready``'s)."""
+        for verdict in verdicts:
+            self._print_line(verdict.to_dict(), "repetition")
+
+    def _verdicts_judged(self) -> None:
+        """Wait for the verdicts still being judged (on their own thread: the frames go on
+        meanwhile) and print them: before any other line, so that the lines come in the order
+        they came when each verdict was judged in the frame loop, and before a frame of the
+        ``--out`` video is drawn (the video is the same as it was then)."""
+        if self.verdicts is not None and self.verdicts.asked:
+            self._verdict_lines(self.verdicts.ready(wait=True))
 
     def _finish(self) -> None:
         """The stream has ended: the segments not yet given, and (``--split repetitions``)
@@ -1061,8 +1076,7 @@ class Watcher:
         for segment in finished:
             self._emit(segment)
         if self.verdicts is not None:
-            for verdict in self.verdicts.update(ended=True):
-                self._print_line(verdict.to_dict(), "repetition")
+            self._verdict_lines(self.verdicts.update(ended=True))
 
     def _emit(self, segment: Any) -> None:
         from cbr.segmentation import NO_FRAMES, NOBODY
@@ -1094,6 +1108,8 @@ class Watcher:
         """One JSON line on stdout, flushed (a segment's, a repetition's or a progress line);
         with ``--progress`` each says which it is first, ``"event": event`` (without it, the
         lines are as they were: every reader took each as a finished segment's)."""
+        if event != "repetition":  # the verdicts asked for before it come first
+            self._verdicts_judged()
         if self.stdout_gone:
             return
         if self.every is not None and event is not None:
