@@ -1,7 +1,19 @@
-"""The case base store (SQLAlchemy; SQLite by default): the only package that speaks SQL."""
+"""The case base store (SQLAlchemy; SQLite by default): the only package that speaks SQL.
+
+What tells a store's place and checks it (:mod:`.locations`, :mod:`.journals`' ``prepare_write``),
+its errors, encodings and records load with the package; the names of the modules that speak
+SQL (the engine, the store, its tables and upgrades) are imported on first use, and with them
+SQLAlchemy (about half a second), so that a command refuses a missing file or a ``--db`` that
+is a folder before paying for them.
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from .encoding import canonical_json, check_case_base_name, config_hash, decode_array, encode_array
-from .engine import in_wal_mode
 from .errors import (
     CaseBaseGone,
     EmptyStore,
@@ -14,13 +26,13 @@ from .journals import prepare_write, roll_back_interrupted
 from .locations import (
     EMPTY_DB,
     check_store_file,
+    check_to_open,
     check_url_or_path,
     same_store,
     shown_db,
     sqlite_file,
     store_files,
 )
-from .models import SCHEMA_VERSION
 from .records import (
     CaseArrays,
     CaseBaseInfo,
@@ -32,8 +44,24 @@ from .records import (
     WholeCaseBase,
     check_width,
 )
-from .store import CaseStore, StoreTransaction, open_store, write_store
-from .upgrade import missing_columns, missing_indexes, upgrade_store
+
+if TYPE_CHECKING:
+    from .engine import in_wal_mode
+    from .models import SCHEMA_VERSION
+    from .store import CaseStore, StoreTransaction, write_store
+    from .upgrade import missing_columns, missing_indexes, upgrade_store
+
+#: the names whose modules import SQLAlchemy, and those modules
+_LAZY = {
+    "in_wal_mode": ".engine",
+    "SCHEMA_VERSION": ".models",
+    "CaseStore": ".store",
+    "StoreTransaction": ".store",
+    "write_store": ".store",
+    "missing_columns": ".upgrade",
+    "missing_indexes": ".upgrade",
+    "upgrade_store": ".upgrade",
+}
 
 __all__ = [
     "EMPTY_DB",
@@ -58,6 +86,7 @@ __all__ = [
     "check_case_base_name",
     "check_url_or_path",
     "check_store_file",
+    "check_to_open",
     "check_width",
     "config_hash",
     "decode_array",
@@ -75,3 +104,25 @@ __all__ = [
     "missing_indexes",
     "upgrade_store",
 ]
+
+
+def open_store(
+    url_or_path: str | Path,
+    *,
+    create: bool = False,
+    readonly: bool = False,
+    timeout_s: float = 30.0,
+) -> CaseStore:
+    """Open (and, if ``create``, initialise) a case base store:
+    :func:`casebase_store.store.open_store`, whose refusals of a case base file (no such file,
+    a folder, a missing folder: :func:`check_to_open`) come before SQLAlchemy is imported."""
+    check_to_open(url_or_path, timeout_s, create=create, readonly=readonly)
+    from .store import open_store as opened
+
+    return opened(url_or_path, create=create, readonly=readonly, timeout_s=timeout_s)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,10 +15,8 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import URL, Connection, make_url
 from sqlalchemy.exc import ArgumentError, SQLAlchemyError
 
-from features.errors import ConfigError
 from features.fileio import SQLITE_MAGIC
 from features.text import hide_passwords
-from features.values import is_number
 
 from .driver_errors import translate_error
 from .errors import StoreError
@@ -284,10 +282,3 @@ def _configure_postgresql(engine: Engine, timeout_s: float, readonly: bool) -> N
             cur.execute("SET default_transaction_read_only = on")
         cur.close()
         dbapi_conn.commit()  # SET ran in the driver's implicit transaction
-
-
-def check_timeout(timeout_s: Any) -> None:
-    """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
-    its busy timeout off for a negative one; a bool is no time)."""
-    if not (is_number(timeout_s) and 0.0 <= float(timeout_s) < float("inf")):
-        raise ConfigError(f"must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s")

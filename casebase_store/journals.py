@@ -6,14 +6,14 @@ from __future__ import annotations
 import os
 from contextlib import suppress
 from pathlib import Path
-
-from sqlalchemy import Engine
-from sqlalchemy.exc import DBAPIError
+from typing import TYPE_CHECKING
 
 from .driver_errors import SQLITE_READONLY_ROLLBACK, translate_error
-from .engine import check_timeout, dispose, is_sqlite, make_engine
 from .errors import StoreError
-from .locations import check_name_length, check_writable, journal_file, sqlite_file
+from .locations import check_name_length, check_timeout, check_writable, journal_file, sqlite_file
+
+if TYPE_CHECKING:
+    from sqlalchemy import Engine
 
 #: The first bytes of a rollback journal that holds a transaction (SQLite zeroes or deletes
 #: it when the transaction ends)
@@ -45,6 +45,12 @@ def roll_back_interrupted(url_or_path: str | Path, *, timeout_s: float = 30.0) -
     check_name_length(file)
     if not file.is_file() or not _hot_journal(file):
         return False
+    # the connection's modules (SQLAlchemy) only for a journal to undo: a command's
+    # prepare_write of a file without one, before its refusals, imports none of them
+    from sqlalchemy.exc import DBAPIError
+
+    from .engine import dispose, make_engine
+
     check_timeout(timeout_s)
     for readonly in (True, False):  # first a look that writes nothing: is it to be undone?
         engine, where = make_engine(file, timeout_s, readonly)
@@ -69,6 +75,8 @@ def undo_failed_write(engine: Engine, timeout_s: float) -> None:
     as a killed writer's. The failed connection is closed first (it holds the journal's
     changes undone no more). Nothing happens for another backend or a file without such a
     journal."""
+    from .engine import is_sqlite  # the engine's module was imported to make ``engine``
+
     if not is_sqlite(engine):
         return
     file = Path(str(engine.url.database))

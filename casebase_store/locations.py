@@ -6,14 +6,17 @@ from __future__ import annotations
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from sqlalchemy.engine import URL, make_url
-from sqlalchemy.exc import ArgumentError
-
+from features.errors import ConfigError
+from features.fileio import path_exists
 from features.text import hide_passwords
+from features.values import is_number
 
 from .errors import StoreError
+
+if TYPE_CHECKING:
+    from sqlalchemy.engine import URL
 
 #: the start of a database URL of one of SQLAlchemy's dialects (``postgresql+psycopg:``)
 #: without the ``://`` before its server (a "/" or the ":" missing): a URL mistyped, not a
@@ -52,9 +55,8 @@ def sqlite_file(url_or_path: str | Path) -> Path | None:
                 _USER_PASSWORD.sub(r"\1***@", text),
             )
         return Path(text)
-    try:
-        url = make_url(text)
-    except (ArgumentError, ValueError):  # ValueError: a port that is not a number
+    url = _parsed_url(text)
+    if url is None:
         return None
     if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
         return None
@@ -85,9 +87,8 @@ def same_store(a: str | Path, b: str | Path) -> bool:
             return os.path.samefile(fa, fb)
         except OSError:  # one of them not there (yet)
             return fa.resolve() == fb.resolve()
-    try:
-        ua, ub = make_url(str(a)), make_url(str(b))
-    except (ArgumentError, ValueError):
+    ua, ub = _parsed_url(str(a)), _parsed_url(str(b))
+    if ua is None or ub is None:
         return str(a) == str(b)
 
     def key(u: URL) -> tuple[Any, ...]:
@@ -138,10 +139,20 @@ def shown_db(url_or_path: str | Path) -> str:
     text = str(url_or_path)
     if "://" not in text:
         return text
+    url = _parsed_url(text)
+    return _hide_password(text) if url is None else shown_url(url)
+
+
+def _parsed_url(text: str) -> URL | None:
+    """``text`` read as a database URL by SQLAlchemy, imported here, when a URL is met: a
+    case base file's path is told without it (a command's refusals come before it)."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import ArgumentError
+
     try:
-        return shown_url(make_url(text))
-    except (ArgumentError, ValueError):
-        return _hide_password(text)
+        return make_url(text)
+    except (ArgumentError, ValueError):  # ValueError: a port that is not a number
+        return None
 
 
 def check_name_length(file: Path) -> None:
@@ -207,3 +218,30 @@ def check_url_or_path(url_or_path: Any, name: str = "url_or_path") -> None:
         )
     if not str(url_or_path).strip():
         raise StoreError(EMPTY_DB, name)
+
+
+def check_timeout(timeout_s: Any) -> None:
+    """Refuse a ``timeout_s`` that is not a finite number of seconds >= 0 (SQLite turns
+    its busy timeout off for a negative one; a bool is no time)."""
+    if not (is_number(timeout_s) and 0.0 <= float(timeout_s) < float("inf")):
+        raise ConfigError(f"must be a number of seconds >= 0, got {timeout_s!r}", "timeout_s")
+
+
+def check_to_open(
+    url_or_path: Any, timeout_s: Any = 30.0, *, create: bool = False, readonly: bool = False
+) -> Path | None:
+    """What :func:`casebase_store.store.open_store` refuses before it connects, told without
+    SQLAlchemy for a case base file: no path or URL (:func:`check_url_or_path`), a
+    ``timeout_s`` that is no time, a file name too long, a file that does not exist (to read,
+    or to open without ``create``), and what :func:`check_store_file` refuses (a folder, a
+    device, a missing folder). The SQLite file; None for a database URL of another backend."""
+    check_url_or_path(url_or_path)
+    check_timeout(timeout_s)
+    file = sqlite_file(url_or_path)
+    if file is None:
+        return None
+    check_name_length(file)
+    if (readonly or not create) and not path_exists(file):
+        raise StoreError("no such case base file", file)
+    check_store_file(file)
+    return file

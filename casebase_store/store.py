@@ -47,7 +47,7 @@ from sqlalchemy import text as sql_text
 from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 from sqlalchemy.orm import Session
 
-from features.fileio import path_exists, remove_stale_temporaries, temporary_prefix
+from features.fileio import remove_stale_temporaries, temporary_prefix
 from features.version import __version__
 
 from .driver_errors import translate_error
@@ -65,10 +65,15 @@ from .encoding import (
     encode_array,
     read_json,
 )
-from .engine import check_timeout, dispose, is_sqlite, leave_wal_mode, make_engine
+from .engine import dispose, is_sqlite, leave_wal_mode, make_engine
 from .errors import CaseBaseGone, EmptyStore, StaleCaseError, StoreError
 from .journals import undo_failed_write
-from .locations import check_name_length, check_url_or_path, refuse_dangling, sqlite_file
+from .locations import (
+    check_to_open,
+    check_url_or_path,
+    refuse_dangling,
+    sqlite_file,
+)
 from .models import (
     SCHEMA_VERSION,
     UPGRADABLE,
@@ -1061,13 +1066,7 @@ def open_store(
     locked, foreign or other-version database, naming ``url_or_path`` for an empty one or one
     of another type (the commands say ``--db``).
     """
-    check_url_or_path(url_or_path)
-    check_timeout(timeout_s)
-    file = sqlite_file(url_or_path)
-    if file is not None:
-        check_name_length(file)
-    if file is not None and (readonly or not create) and not path_exists(file):
-        raise StoreError("no such case base file", file)
+    check_to_open(url_or_path, timeout_s, create=create, readonly=readonly)
     engine, where = make_engine(url_or_path, timeout_s, readonly)
     store = CaseStore(engine, where, timeout_s, readonly)
     try:

@@ -16,11 +16,11 @@ from collections import Counter
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from casebase_store import CaseBaseGone, CaseStore, StaleCaseError
+from casebase_store import CaseBaseGone, StaleCaseError
 from features.errors import DataError, ParameterError, PosecbrError
 from features.poses import PoseSequence
 from features.progress import progress
@@ -33,6 +33,9 @@ from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
 from .stored import StoredClassifier, judges_after_change, load_classifier, write_matrices
+
+if TYPE_CHECKING:
+    from casebase_store import CaseStore
 
 SOLVE_CHUNK = 256  # clips per batched solve (one block of queries of the matrix product)
 

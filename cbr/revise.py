@@ -18,15 +18,19 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from casebase_store import CaseBaseInfo, StaleCaseError, StoreTransaction
+from casebase_store import CaseBaseInfo, StaleCaseError
 from features.errors import ConfigError
 
 from .casebase import CaseBase
 from .problem import Problem
 from .retrieve import retrieve
+
+if TYPE_CHECKING:
+    from casebase_store import StoreTransaction
 
 
 @dataclass(frozen=True)

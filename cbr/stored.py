@@ -15,18 +15,16 @@ import re
 import sys
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from casebase_store import (
     CaseArrays,
     CaseBaseInfo,
-    CaseStore,
     NewCase,
     StaleCaseError,
     StoreError,
-    StoreTransaction,
     case_matrix,
     sqlite_file,
 )
@@ -50,6 +48,9 @@ from .unknown_records import Calibrated
 from .unknown_stored import AT_FIT, calibrate_judges, judges_apart, judges_from_dict
 from .weights import MIRROR_FLAG, FeatureWeights
 from .words import CASE_KINDS as CASE_KINDS
+
+if TYPE_CHECKING:
+    from casebase_store import CaseStore, StoreTransaction
 
 #: bump when the model document changes meaning: a posecbr that reads up to a lower format
 #: refuses the model (:func:`check_format`). A field an older reader may ignore needs no bump

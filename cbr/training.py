@@ -20,7 +20,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,11 +29,8 @@ from casebase_store import (
     Seen,
     SourcedCase,
     StoreError,
-    StoreTransaction,
     check_case_base_name,
     check_url_or_path,
-    open_store,
-    write_store,
 )
 from features.cluster import connect, gather, map_outcomes
 from features.datasets import DatasetEntry
@@ -61,6 +58,9 @@ from .stored import (
 )
 from .stored import stored_case_base as to_store
 from .words import CASE_KINDS
+
+if TYPE_CHECKING:
+    from casebase_store import StoreTransaction
 
 
 @dataclass(frozen=True)
@@ -632,6 +632,8 @@ def store_fitted(
     """Store the fitted classifier as case base ``name`` in ``db`` in one transaction
     (``labels``: its training clips' solutions, for the summary; ``seen``: what was read of
     ``name`` before the fit, checked by a ``replace``)."""
+    from casebase_store import write_store
+
     check_url_or_path(db, "db")
     check_fitted(fitted, "case_base_")
     cb = to_store(fitted)
@@ -775,6 +777,8 @@ def append_plan(
     another solution; a ``target`` close to the case base's or to one of ``data_columns``
     (the added clips') is guessed as mistyped. Refused with ConfigError naming the argument
     (``target``, ``cases``; ``train --append`` says ``--target``, ``--split``)."""
+    from casebase_store import open_store
+
     store = open_store(db, create=False, readonly=True)
     try:
         stored = load_classifier(store, name)
@@ -1042,6 +1046,8 @@ def append_described(
     """:func:`append` on clips already reduced by :func:`append_plan`'s plan. Several
     processes may append to one case base at once: each commits its cases in one transaction
     (ids from the database, never reused), so none is lost or duplicated."""
+    from casebase_store import open_store
+
     text = [str(v) for v in check_labels(labels, len(clips), "labels")]
     keep, skipped, too_short = usable(clips)
     if not keep:
@@ -1129,6 +1135,8 @@ def _file_named(cb: CaseBase, labels: Sequence[str]) -> list[str]:
 
 def _refresh_matrices(db: str | Path, name: str) -> None:
     """A large case base's memory-mapped matrices, written for the state just stored."""
+    from casebase_store import open_store
+
     store = open_store(db, create=False)
     try:
         write_matrices(store, name)

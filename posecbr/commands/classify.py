@@ -392,6 +392,31 @@ def _each_repetition(
     return out, out_truths
 
 
+def _chosen(args: argparse.Namespace, store: CaseStore) -> str:
+    """The case base ``--name`` (the store's only one when left out), and every clip there
+    (:func:`load_inputs`' first look at them), before the classifier is loaded."""
+    from features.datasets import detect_kind
+
+    with as_options(NAME):
+        name = store.choose(args.name)
+    for path in args.clips:
+        detect_kind(path)
+    return str(name)
+
+
+def _feedback_settings(args: argparse.Namespace) -> Any:
+    """``--feedback``'s thresholds (``--novelty``, ``--benefit``; the defaults when left out),
+    refused before the store is opened."""
+    from cbr.classification import FeedbackSettings
+
+    defaults = FeedbackSettings()
+    with as_options(FEEDBACK_OPTIONS):
+        return FeedbackSettings(
+            defaults.novelty_threshold if args.novelty is None else args.novelty,
+            defaults.benefit_threshold if args.benefit is None else args.benefit,
+        )
+
+
 def _open_reader(args: argparse.Namespace) -> CaseStore:
     """The store, read-only even with --feedback: loading fills in nothing (a writable store
     would store the representations missing from it) and every check may still refuse; the
@@ -431,26 +456,16 @@ FEEDBACK_OPTIONS = {
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.classification import (
-        FeedbackSettings,
-        check_feedback_cases,
-        check_feedback_label,
-        classify_clips,
-    )
-    from cbr.stored import load_classifier
-
     _check_args(args)
-    defaults = FeedbackSettings()
-    with as_options(FEEDBACK_OPTIONS):
-        settings = FeedbackSettings(
-            defaults.novelty_threshold if args.novelty is None else args.novelty,
-            defaults.benefit_threshold if args.benefit is None else args.benefit,
-        )
+    settings = _feedback_settings(args) if args.feedback is not None else None
     store = _open_reader(args)
     label = None
     try:
-        with as_options(NAME):
-            name = store.choose(args.name)
+        name = _chosen(args, store)
+        # the classifier's modules (numba's kernels among them): after the refusals above
+        from cbr.classification import check_feedback_cases, check_feedback_label, classify_clips
+        from cbr.stored import load_classifier
+
         stored = load_classifier(store, name)
         n_cases = len(stored.classifier.case_base_)
         if args.k is not None:

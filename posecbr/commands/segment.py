@@ -790,7 +790,6 @@ def load_case_base(db: str, name: str | None) -> Any:
     """The case base ``name`` stored in ``db`` (the only one when None), as
     :func:`cbr.stored.load_classifier` loads it: its classifier and what its cases are."""
     from casebase_store import open_store
-    from cbr.stored import load_classifier
 
     with as_options(DB):
         store = open_store(db, create=False, readonly=True)
@@ -805,6 +804,8 @@ def load_case_base(db: str, name: str | None) -> Any:
                 )
                 raise ConfigError(f"the store holds {held}", store.where)
             name = names[0]
+        from cbr.stored import load_classifier  # the classifier's modules: the store opened
+
         return load_classifier(store, name)
     finally:
         store.close()

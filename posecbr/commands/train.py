@@ -249,8 +249,6 @@ DEFAULTS: dict[str, Any] = {
 
 
 def _estimator(args: argparse.Namespace) -> Any:
-    from cbr.estimator import CaseBaseClassifier
-
     o = {k: (DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)) for k in DEFAULTS}
     if args.split == "windows" and args.feature_weights is None:
         # overlapping windows of one stretch are near copies: the within-activity spread that
@@ -277,6 +275,8 @@ def _estimator(args: argparse.Namespace) -> Any:
             "--trim",
         )
     _check_fluent_options(args, o["features"], measure.name)
+    from cbr.estimator import CaseBaseClassifier  # after the refusals of the options above
+
     estimator = CaseBaseClassifier(
         features=o["features"],
         similarity=o["similarity"],
@@ -658,15 +658,7 @@ def _check_new_store(args: argparse.Namespace) -> None:
     that is not a case base store, or one that already holds ``--name`` (neither --replace
     nor --append given). An empty database is left to the training, which creates the store;
     the transaction that stores the model checks again."""
-    from casebase_store import (
-        EMPTY_DB,
-        EmptyStore,
-        Seen,
-        StoreError,
-        check_store_file,
-        open_store,
-        sqlite_file,
-    )
+    from casebase_store import EMPTY_DB, EmptyStore, Seen, StoreError, check_store_file, sqlite_file
 
     # what --replace will replace: none, unless one is read below (checked when it is stored)
     args.seen = Seen() if args.replace else None
@@ -679,6 +671,8 @@ def _check_new_store(args: argparse.Namespace) -> None:
         check_output(file, inputs=[p for p in inputs if p is not None], what="case base file")
         if not file.exists() or file.stat().st_size == 0:
             return  # a new database
+    from casebase_store import open_store  # SQLAlchemy: for a store there to read
+
     try:
         store = open_store(args.db, create=False, readonly=True)
     except EmptyStore:
@@ -984,14 +978,6 @@ def run(args: argparse.Namespace) -> int:
     args.kept_whole = set()  # --split repetitions: the clips with none, kept whole
     _check_options(args)  # before the training's imports (seconds): a bad option at once
     from casebase_store import prepare_write
-    from cbr.training import (
-        ClipsFailed,
-        append_described,
-        append_plan,
-        describe_entries,
-        fit_plan,
-        train_described,
-    )
 
     split_defaulted = args.split is None and not args.append
     if str(args.db).strip():  # a writer: refused where it cannot write, before any work
@@ -1000,6 +986,8 @@ def run(args: argparse.Namespace) -> int:
         _check_append(args)
         args.name = _append_name(args)
         columns = _data_columns(args) if args.target is not None else []
+        from cbr.training import append_plan
+
         with as_options(CLIP_OPTIONS):
             plan, uid, args.split, args.target = append_plan(
                 args.db, args.name, args.target, args.split, columns
@@ -1017,7 +1005,11 @@ def run(args: argparse.Namespace) -> int:
         _check_overlaps(args)
         args.split = args.split or _default_split(args)
         estimator = _estimator(args)
+        from cbr.training import fit_plan  # the training's modules: after the refusals above
+
         plan = fit_plan(estimator)
+    from cbr.training import ClipsFailed, append_described, describe_entries, train_described
+
     try:
         if _in_memory(args):
             clips, solutions = _described_in_memory(args, plan)
