@@ -465,11 +465,11 @@ def each_repetition_hint(db: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cbr.segmentation import check_segmentable, segment
-
     _inputs_given(args)
     overlays = _outputs(args)
-    stored = load_case_base(args.db, args.name)
+    stored = load_case_base(args.db, args.name)  # a case base file not there: before the imports
+    from cbr.segmentation import check_segmentable, segment
+
     clf = stored.classifier
     check_k_option(clf, args.k)  # before any recording is read (a video's poses take seconds)
     judge = judge_named(clf, args.unknown, args.db, "segment")
