@@ -59,7 +59,9 @@ How (all channels at once, no per-frame loops):
    :data:`ENDS_S`; each end the line's outer tenth of the frames, or of its range where a
    clip mostly at rest has fewer frames there) and, for a clearly periodic
    movement, taken about its running mean over one period; for an alternating movement, the
-   side-against-side part, whose peaks are one side's repetitions and troughs the other's
+   side-against-side part, whose peaks are one side's repetitions and troughs the other's,
+   read along the angles that go out and come back rather than those held off to one side
+   when the body moves along them as far (:func:`_side_direction`)
    (small wobbles about the symmetric posture between them are none, :func:`_taking_turns`;
    two of one side that the whole posture does not come back toward rest between are one,
    :func:`_one_side_out`; one cut off by the clip's start or end counts when it got nearly
@@ -2013,6 +2015,35 @@ def _one_side_out(
     return groups
 
 
+def _side_direction(anti: np.ndarray) -> np.ndarray:
+    """The unit direction ``(C,)`` one side moves against the other along, of the
+    side-against-side deviations ``anti`` ``(n, C)`` (:func:`side_parts`): as
+    :func:`movement_direction`, each angle weighted by how little of the time it is held off
+    the symmetric posture (one less its median distance from it over its 95th percentile: a
+    kick's hip goes out and comes back; a guard stance's bent arms stay off to one side and
+    flip with the kicking leg, a step at each take that pulls the unweighted direction), and
+    mapped back unweighted, when the body moves along it at least as far (:func:`_span`) and
+    goes out and comes back along it at least as far (:func:`_out_and_back`) as along the
+    unweighted direction: the flip of a held posture moves less than the excursion it hides.
+    Where it moves less, the weighting has turned the line onto a lesser movement (the legs
+    shifting under arms that are held out through a slow extension, and so weighed out
+    themselves); where it goes out farther only, onto a change made once (the arms lowered
+    from the exercise before, or bent to start a jog); the unweighted direction stands."""
+    plain = movement_direction(anti)
+    held = np.median(np.abs(anti), axis=0)
+    reach = np.percentile(np.abs(anti), 95, axis=0)
+    w = np.clip(1.0 - held / np.where(reach > 0, reach, 1.0), 0.0, 1.0)
+    weighted = movement_direction(anti * w) * w
+    norm = float(np.linalg.norm(weighted))
+    if norm == 0:
+        return plain
+    weighted = weighted / norm
+    one, other = anti @ weighted, anti @ plain
+    if _span(one) < _span(other) or _out_and_back(one) < _out_and_back(other):
+        return plain
+    return np.asarray(weighted)
+
+
 def _alternating_repetitions(
     x: np.ndarray,
     names: tuple[str, ...],
@@ -2041,7 +2072,7 @@ def _alternating_repetitions(
         np.zeros(x.shape[1]),
         None,
     )
-    direction = movement_direction(anti)
+    direction = _side_direction(anti)
     line = anti @ direction  # 0 = a symmetric posture
     alike = sym @ movement_direction(sym)
     period, strength = find_period(np.diff(line)[:, None], fps)
