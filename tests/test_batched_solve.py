@@ -14,6 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from sklearn.metrics.pairwise import nan_euclidean_distances
 from sklearn.neighbors import NearestNeighbors
 
 from cbr.classification import classify_clips
@@ -78,10 +79,23 @@ def test_batched_solve_finds_scikit_learns_brute_force_neighbours(
     solved = fitted.solve(uiprmd[2])
     q = np.stack([cb.measure.represent_query(s.problem.values) for s in solved])
     q32 = q.astype(np.float32).astype(np.float64)  # the query as the search multiplies it
+    full = [s.problem.measured() is None for s in solved]
+    assert 0 < sum(full) < len(full)  # both kinds: every column shown, and some never shown
     dist, want = NearestNeighbors(n_neighbors=K, algorithm="brute").fit(rows).kneighbors(q32)
     got = np.stack([s.retrieval.indices for s in solved])
-    np.testing.assert_array_equal(got, want)
-    np.testing.assert_allclose(np.stack([s.retrieval.distances for s in solved]), dist, rtol=1e-5)
+    np.testing.assert_array_equal(got[full], want[full])
+    np.testing.assert_allclose(
+        np.stack([s.retrieval.distances for s in solved])[full], dist[full], rtol=1e-5
+    )
+    # a column a clip never showed is left out: scikit-learn's nan_euclidean_distances with
+    # its fills missing, on the same float32 rows and query
+    for i in np.flatnonzero(~np.asarray(full)):
+        s = solved[i]
+        query = np.where(s.problem.measured(), q32[i], np.nan)
+        d = nan_euclidean_distances(query[None], rows)[0]
+        order = np.argsort(d, kind="stable")[:K]
+        np.testing.assert_array_equal(s.retrieval.indices, order)
+        np.testing.assert_allclose(s.retrieval.distances, d[order], rtol=1e-5)
 
 
 @pytest.mark.parametrize("fitted", [{}], indirect=True)  # explaining costs; one index will do
