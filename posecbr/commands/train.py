@@ -1067,9 +1067,10 @@ def _skipped(
     """The pieces that show no person, by their file (a recording cut into windows has many:
     each file once, with how many of its pieces), and those shorter than one movement can be
     (:func:`cbr.training.usable` names them with their length). Cut into repetitions, a
-    piece that shows no person is a clip kept whole: repetitions are found where the person
-    is seen; so is a short one from a clip in ``kept_whole`` (a clip shorter than one
-    repetition can be has none: it was said to be "kept whole", not a repetition).
+    piece that shows no person, or a short one, from a clip in ``kept_whole`` is that clip
+    (one with no repetition: it was said to be "kept whole", not a repetition); another is
+    a repetition (one with the hips out of view is cut into repetitions counted from the
+    arms: it was said to be as many clips).
     ``no_torso``: each of ``nobody``'s :attr:`cbr.described.DescribedClip.no_torso`, in
     order: those that show some of the torso's joints (the hips out of view) are said to
     show no torso, naming the joints, as ``classify`` and ``segment`` say it (they were said
@@ -1079,16 +1080,16 @@ def _skipped(
     whole = [n for n in short if n.rsplit(" (lasts ", 1)[0] in kept_whole]
     cut = [n for n in short if n not in whole]
     shorter = f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
-    why_none: dict[str, list[str]] = {}
+    why_none: dict[tuple[str, str], list[str]] = {}
     reasons = no_torso if len(no_torso) == len(nobody) else [""] * len(nobody)
     for name, why in zip(nobody, reasons, strict=True):
-        why_none.setdefault(why or "shows no person", []).append(name)
-    pieces = "clips" if split == "repetitions" else split
+        kind = "clips" if name in kept_whole else split
+        why_none.setdefault((why or "shows no person", kind), []).append(name)
     lines = [
         _listed(
-            names, pieces, "that " + (why if len(names) == 1 else why.replace("shows ", "show ", 1))
+            names, kind, "that " + (why if len(names) == 1 else why.replace("shows ", "show ", 1))
         )
-        for why, names in why_none.items()
+        for (why, kind), names in why_none.items()
     ]
     lines += [
         _listed(names, kind, why)
