@@ -158,15 +158,14 @@ def _single_clip_note(single: list[str]) -> str:
 
 def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dataset") -> Prepared:
     """Targets, subjects and groups of ``clips``; classes with a single clip are dropped with
-    a note."""
+    a note. Every clip left out (:func:`_shown`) is refused with the notes that say why: it
+    was "no clip shows a person", of clips that show the shoulders and arms, the hips out of
+    view."""
     if not clips:
         raise DataError("no clips found", source)
     clips, nobody = _shown(clips)
     if not clips:
-        raise DataError(
-            "no clip shows a person for as long as one movement can last: nothing to compare",
-            source,
-        )
+        raise DataError(f"no clip to compare: {'; '.join(nobody)}", source)
     y = _targets(clips, settings.target, source)
     within = _groups(clips, settings.within_column, source)
     counts = Counter(y)
