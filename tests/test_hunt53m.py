@@ -8,6 +8,11 @@
 - ``compare`` of clips every one of which is left out (the hips out of view, no joint at
   all, too short) said "no clip shows a person for as long as one movement can last",
   though the notes name clips with the hips out of view as showing no torso (hunt 53j).
+- ``watch``: a live source's rate measured with a drop-out left out (hunt 53d) left out a
+  fall of the rate too: each slow interval was a "pause" after which the stream came on
+  no faster than a quarter below the median (the lower bound alone), and a fall from 60
+  to 15 fps was measured near 60, no change of rate, until the slow intervals took half
+  the window's time.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from cbr.evaluation.settings import CompareSettings
 from features.clips import Clip
 from features.errors import DataError
 from posecbr.commands.train import _skipped
+from posecbr.commands.watch import BURST_S, CHANGE_WINDOW_S, RATE_CHANGE, _frame_rate
 from tests.test_hunt53j import _abduction, _hips_out
 
 NO_HIPS = "shows no torso (no frame shows its left hip, right hip)"
@@ -65,3 +71,19 @@ def test_compare_of_clips_all_left_out_says_why_in_the_notes_words() -> None:
         " person: blank.npz; left out 1 clip shorter than one movement can be (0.4 s):"
         " short.npz"
     )
+
+
+def test_a_fall_of_the_rate_is_no_drop_out() -> None:
+    """60 fps for 0.4 s, then 15 fps for 0.2 s (the camera slowed down: no frame lost): the
+    rate over the latest frames, as a change of rate is measured, is their count over their
+    span (hand: 24 + 3 intervals in 0.6 s, 45 fps), a change of rate from 60 by more than
+    RATE_CHANGE. Hunt 53d's rule took the first two slow intervals for drop-outs (the
+    intervals after each as slow, no faster than the median) and measured 25 intervals in
+    0.467 s, 53.6 fps: no change. A drop-out (60 fps, a 0.3-s pause, 60 fps: the frames
+    after at the median pace) is still left out: 60 fps."""
+    fell = np.concatenate([np.arange(25) / 60.0, 0.4 + np.arange(1, 4) / 15.0])
+    rate = _frame_rate(fell.tolist(), CHANGE_WINDOW_S, BURST_S)
+    assert rate == pytest.approx(27 / 0.6)
+    assert abs(rate / 60.0 - 1.0) > RATE_CHANGE
+    dropped = np.concatenate([np.arange(31) / 60.0, 0.8 + np.arange(19) / 60.0])
+    assert _frame_rate(dropped.tolist(), CHANGE_WINDOW_S, BURST_S) == pytest.approx(60.0)

@@ -2099,7 +2099,9 @@ def _dropped(gaps: Any, median: float, sent: Any) -> Any:
     stream resumed at its own pace, the mean of the (up to as many) intervals after the
     pause no shorter than :data:`AT_ONCE` of the median, as :meth:`Regrid._burst` tells a
     drop-out from a burst (frames held up on the way, then read at once: their pause is
-    the time the frames read at once were taken in). None is when the pauses so told would
+    the time the frames read at once were taken in), nor longer than such a pause (the
+    stream's pace fell: 60 fps, then 15, had the slow intervals left out as drop-outs, and
+    the fall measured at 54 fps, no change of rate). None is when the pauses so told would
     take more of the time counted than the rest (a stream that comes in bursts whose
     frames, read at once, are most of its intervals: their median is the reader's pace, not
     the stream's), nor a pause with no interval after it (which the frames to come may yet
@@ -2111,7 +2113,8 @@ def _dropped(gaps: Any, median: float, sent: Any) -> Any:
     out = np.zeros(len(gaps), dtype=bool)
     for i in np.flatnonzero(sent & (gaps > BRIDGE_FRAMES * median)).tolist():  # a few
         after = gaps[i + 1 : i + 1 + BRIDGE_FRAMES]
-        out[i] = len(after) > 0 and float(np.mean(after)) >= AT_ONCE * median
+        pace = float(np.mean(after)) if len(after) else math.nan  # NaN: none told
+        out[i] = AT_ONCE * median <= pace <= BRIDGE_FRAMES * median
     if gaps[out].sum() > gaps[sent & ~out].sum():  # mostly pauses: bursts, not drop-outs
         out[:] = False
     return out
