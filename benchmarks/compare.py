@@ -4,8 +4,9 @@ Every similarity x feature level, DAD, and the peers (tslearn DTW 1-NN on eight 
 MiniRocket when sktime or aeon is installed), cross-validated leave-one-subject-out on
 UI-PRMD movement type, UI-PRMD correct-versus-incorrect (one model per movement) and HDM05
 actions. Prints one table per task and writes ``benchmarks/results/compare.json`` with the
-figures, the best interpretable configuration's margin over each peer (accuracy difference and
-McNemar p) and its prediction-time ratio to them, plus machine and versions.
+figures, the best interpretable configuration's margin over each peer (accuracy difference,
+McNemar p over the clips and Wilcoxon p over the subjects held out) and its prediction-time
+ratio to them, plus machine and versions.
 
     python -m benchmarks.compare            # all three tasks on ../shared/data (~20 min)
     python -m benchmarks.compare --quick    # the bundled demo subset only (~1 min)
@@ -50,6 +51,9 @@ def summarise(results: dict[str, Any], seconds: float) -> dict[str, Any]:
         "predict_ms_per_clip",
         "case_base_size",
         "mcnemar_p",
+        "accuracy_ci_people",
+        "wilcoxon_p",
+        "wilcoxon_n",
         "per_group",
     )
     methods = [{k: m[k] for k in keep if k in m and m[k] != {}} for m in results["methods"]]
@@ -59,19 +63,23 @@ def summarise(results: dict[str, Any], seconds: float) -> dict[str, Any]:
     if bi is not None:
         import numpy as np
 
-        from cbr.evaluation.stats import mcnemar_exact
+        from cbr.evaluation.stats import mcnemar_exact, signed_rank
 
         for m in results["methods"]:
             if m["kind"] != "peer" or m["status"] != "ok":
                 continue
             a, b = np.array(bi["correct"]), np.array(m["correct"])
             ratio = bi["predict_ms_per_clip"] / max(m["predict_ms_per_clip"], 1e-9)
+            people = bi.get("per_subject") or {}
+            # over the subjects held out (leave-one-subject-out only): the person as the unit
+            d = [people[p]["accuracy"] - m["per_subject"][p]["accuracy"] for p in people]
             versus.append(
                 {
                     "interpretable": bi["name"],
                     "peer": m["name"],
                     "accuracy_difference": bi["accuracy"] - m["accuracy"],
                     "mcnemar_p": mcnemar_exact(int((a & ~b).sum()), int((~a & b).sum())),
+                    "wilcoxon_p": signed_rank(np.array(d))[2] if d else None,
                     "predict_time_ratio": ratio,
                 }
             )

@@ -85,6 +85,7 @@ def test_compare_quick_runs_and_records_the_peers(
         assert math.isfinite(v["predict_time_ratio"]) and v["predict_time_ratio"] > 0
         assert -1.0 <= v["accuracy_difference"] <= 1.0
         assert 0.0 <= v["mcnemar_p"] <= 1.0
+        assert 0.0 <= v["wilcoxon_p"] <= 1.0  # the demo's three subjects held out
 
 
 @pytest.mark.skipif(

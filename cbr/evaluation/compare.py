@@ -44,7 +44,7 @@ from .machine import machine_info
 from .methods import Method, add_covers, methods_for, why_unavailable
 from .results import ClipInfo, CompareResults, CVSummary, DatasetSummary, MethodResult
 from .runner import make_runner
-from .scoring import best_methods, score, with_mcnemar
+from .scoring import best_methods, score, with_tests
 from .settings import CompareSettings
 from .tasks import FoldResult, FoldTask, RunContext, missing_levels, prepare_worker, run_fold
 
@@ -251,7 +251,7 @@ def run_compare(
         + _fallback_notes(rows)
         + _status_notes(rows),
         clips=_clips(data),
-        methods=with_mcnemar(rows, best),
+        methods=with_tests(rows, best, int(settings.seed)),
         best=best,
         best_interpretable=best_interpretable,
     )

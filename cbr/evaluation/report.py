@@ -162,6 +162,21 @@ def _person_cell(s: Scores) -> str:
     )
 
 
+def _people_cells(results: CompareResults, m: MethodResult, s: Scores) -> str:
+    """The accuracy's bootstrap interval over the subjects held out, and Wilcoxon's p-value
+    over them against the best (the subjects whose accuracies differ in the tooltip)."""
+    ci = s.accuracy_ci_people
+    cell = "" if ci is None else f"{_pct(ci[0])}–{_pct(ci[1])}"
+    w = s.wilcoxon
+    if m.name == results.best:
+        test = "<td>best</td>"
+    elif w is None:
+        test = "<td></td>"
+    else:
+        test = f"<td title='{e(w.n)} subjects differ; W = {e(f'{w.w:g}')}'>{e(p_value(w.p))}</td>"
+    return f"<td>{cell}</td>{test}"
+
+
 def _method_row(results: CompareResults, m: MethodResult, s: Scores, person: bool) -> str:
     cls = " class='best'" if m.name == results.best_interpretable else ""
     cb = "" if s.case_base_size is None else e(f"{s.case_base_size:.0f}")
@@ -172,7 +187,7 @@ def _method_row(results: CompareResults, m: MethodResult, s: Scores, person: boo
         f"<td>{_pct(s.accuracy_ci[0])}–{_pct(s.accuracy_ci[1])}</td>"
         f"<td>{_pct(s.macro_f1)}</td>"
         f"<td>{_pct(s.macro_f1_ci[0])}–{_pct(s.macro_f1_ci[1])}</td>"
-        f"{_person_cell(s) if person else ''}"
+        f"{_person_cell(s) + _people_cells(results, m, s) if person else ''}"
         f"<td>{e(f'{s.fit_s:.2f}')}</td><td>{e(f'{s.predict_ms_per_clip:.2f}')}</td>"
         f"<td>{cb}</td><td>{e(p)}</td></tr>"
     )
@@ -188,14 +203,19 @@ def _table(results: CompareResults) -> str:
     rows = [
         "<table id='results'><thead><tr><th class='l'>method</th><th>accuracy %</th>"
         "<th>95 % CI</th><th>macro-F1 %</th><th>95 % CI</th>"
-        + ("<th>per person % ± sd (min)</th>" if person else "")
+        + (
+            "<th>per person % ± sd (min)</th><th>95 % CI over people</th>"
+            "<th>Wilcoxon p vs best (people)</th>"
+            if person
+            else ""
+        )
         + "<th>fit s</th><th>ms / clip</th><th>case base</th><th>McNemar p vs best</th>"
         "</tr></thead><tbody>"
     ]
     for m in results.methods:
         if m.scores is None:
             rows.append(
-                f"<tr><td class='l'>{e(m.name)}</td><td class='l' colspan='{9 if person else 8}'>"
+                f"<tr><td class='l'>{e(m.name)}</td><td class='l' colspan='{11 if person else 8}'>"
                 f"{e(m.status)}: {e(m.message)}</td></tr>"
             )
         else:
@@ -390,7 +410,10 @@ def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
         "case base = cases kept after trimming (mean over folds); McNemar exact test against "
         "the best method on the same clips"
         + (
-            "; per person = the accuracy on each subject held out: mean ± sample sd (lowest)"
+            "; per person = the accuracy on each subject held out: mean ± sample sd (lowest);"
+            " with the person as the unit, the accuracy's 95 % interval from a bootstrap over"
+            " the subjects, and Wilcoxon's signed-rank test of their accuracies against"
+            " the best (n subjects cannot give p below 2/2^n)"
             if _has_person(results)
             else ""
         )

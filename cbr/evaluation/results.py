@@ -185,6 +185,18 @@ class McNemar:
     p: float
 
 
+@dataclass(frozen=True)
+class SignedRank:
+    """Wilcoxon's signed-rank test against ``versus`` over the subjects held out, on their
+    accuracies: ``n`` subjects whose accuracies differ, ``w`` the smaller rank sum,
+    two-sided p-value ``p`` (:func:`cbr.evaluation.stats.signed_rank`)."""
+
+    versus: str
+    n: int
+    w: float
+    p: float
+
+
 def spread(rates: dict[str, Rate]) -> tuple[float, float, float, float] | None:
     """Mean, sample standard deviation, min and max of the rates' values (each subject
     weighs the same, however many clips it has; the deviation NaN for one value), None for
@@ -221,6 +233,8 @@ class Scores:
     fold_notes: list[str]
     mcnemar: McNemar | None = None
     per_subject: dict[str, Rate] = field(default_factory=dict)
+    accuracy_ci_people: tuple[float, float] | None = None
+    wilcoxon: SignedRank | None = None
 
     def subject_spread(self) -> tuple[float, float, float, float] | None:
         """Accuracy over the subjects held out: mean, sd, min, max (:func:`spread`); None
@@ -250,6 +264,11 @@ class Scores:
         if self.mcnemar is not None:
             m = self.mcnemar
             out.update(mcnemar_vs=m.versus, mcnemar_b=m.b, mcnemar_c=m.c, mcnemar_p=m.p)
+        if self.accuracy_ci_people is not None:
+            out["accuracy_ci_people"] = list(self.accuracy_ci_people)
+        if self.wilcoxon is not None:
+            w = self.wilcoxon
+            out.update(wilcoxon_vs=w.versus, wilcoxon_n=w.n, wilcoxon_w=w.w, wilcoxon_p=w.p)
         return out
 
     @staticmethod
@@ -261,6 +280,14 @@ class Scores:
                 r.get(d, "mcnemar_b", where, "int"),
                 r.get(d, "mcnemar_c", where, "int"),
                 r.get(d, "mcnemar_p", where, "num"),
+            )
+        wilcoxon = None
+        if "wilcoxon_vs" in d:
+            wilcoxon = SignedRank(
+                r.get(d, "wilcoxon_vs", where, "str"),
+                r.get(d, "wilcoxon_n", where, "int"),
+                r.get(d, "wilcoxon_w", where, "num"),
+                r.share(d, "wilcoxon_p", where),
             )
         confusion = [
             [r.value(x, f"{where}.confusion[{i}][{j}]", "int") for j, x in enumerate(row)]
@@ -288,6 +315,11 @@ class Scores:
             per_subject=_rates(r, d, "per_subject", where, "accuracy")
             if "per_subject" in d
             else {},
+            # absent under k-fold and in a file written before they were given
+            accuracy_ci_people=r.pair(d, "accuracy_ci_people", where)
+            if "accuracy_ci_people" in d
+            else None,
+            wilcoxon=wilcoxon,
         )
 
 

@@ -1,5 +1,6 @@
 """From a method's predictions to its figures (``Scores``), the best methods, and McNemar's test
-of every method against the best on the same clips."""
+of every method against the best on the same clips, with Wilcoxon's over the subjects held
+out."""
 
 from __future__ import annotations
 
@@ -8,9 +9,16 @@ import dataclasses
 import numpy as np
 
 from .data import Prepared
-from .results import McNemar, MethodResult, Rate, Scores
+from .results import McNemar, MethodResult, Rate, Scores, SignedRank
 from .settings import CompareSettings
-from .stats import bootstrap_macro_f1, macro_f1, mcnemar_exact, wilson_interval
+from .stats import (
+    bootstrap_accuracy,
+    bootstrap_macro_f1,
+    macro_f1,
+    mcnemar_exact,
+    signed_rank,
+    wilson_interval,
+)
 from .tasks import FoldResult
 
 
@@ -35,6 +43,18 @@ def _per_subject(subjects: np.ndarray | None, correct: np.ndarray) -> dict[str, 
     return {str(p): _rate(correct[subjects == p]) for p in sorted(set(subjects.tolist()))}
 
 
+def _people_ci(
+    subjects: np.ndarray | None, correct: np.ndarray, settings: CompareSettings
+) -> tuple[float, float] | None:
+    """The accuracy's bootstrap interval over the subjects held out; None without them."""
+    if subjects is None:
+        return None
+    _, person = np.unique(subjects, return_inverse=True)
+    right = np.bincount(person.ravel(), weights=correct.astype(float))
+    n = np.bincount(person.ravel())
+    return bootstrap_accuracy(right, n, int(settings.bootstrap), seed=int(settings.seed))
+
+
 def _mean_case_base(results: list[FoldResult]) -> float | None:
     """Cases kept after trimming, mean over the folds that built a case base."""
     sizes = [r.case_base_size for r in results if r.case_base_size is not None]
@@ -51,8 +71,8 @@ def score(
     """The figures of one method from its predictions ``(n,)`` of every clip's target.
 
     subjects: ``(n,)`` every clip's subject under leave-one-subject-out: macro-F1's bootstrap
-    resamples them whole and the accuracy is given per subject; None (k-fold) to resample
-    clips, with no accuracy per subject.
+    resamples them whole, the accuracy is given per subject and with a bootstrap interval
+    over the subjects; None (k-fold) to resample clips, with neither.
 
     A prediction outside the target classes (e.g. DAD's answer for an activity the target
     does not name) counts as wrong and is kept in ``unassigned``.
@@ -87,6 +107,7 @@ def score(
         correct=correct.tolist(),
         fold_notes=sorted({note for r in results for note in r.notes}),
         per_subject=_per_subject(subjects, correct),
+        accuracy_ci_people=_people_ci(subjects, correct, settings),
     )
 
 
@@ -103,8 +124,19 @@ def best_methods(methods: list[MethodResult]) -> tuple[str | None, str | None]:
     return max(ok, key=_key)[0].name, max(interp, key=_key)[0].name if interp else None
 
 
-def with_mcnemar(methods: list[MethodResult], best: str | None) -> list[MethodResult]:
-    """Every method that ran, tested against ``best`` on the same clips (exact McNemar)."""
+def _signed_rank(ref: Scores, cur: Scores, versus: str, seed: int) -> SignedRank | None:
+    """Wilcoxon's test of ``cur`` against ``ref`` over the subjects held out; None without."""
+    if not cur.per_subject or set(cur.per_subject) != set(ref.per_subject):
+        return None
+    d = [cur.per_subject[p].value - ref.per_subject[p].value for p in cur.per_subject]
+    n, w, p = signed_rank(np.array(d), seed)
+    return SignedRank(versus, n, w, p)
+
+
+def with_tests(methods: list[MethodResult], best: str | None, seed: int = 0) -> list[MethodResult]:
+    """Every method that ran, tested against ``best``: on the same clips (exact McNemar)
+    and, under leave-one-subject-out, on the same people (Wilcoxon's signed-rank test of
+    their accuracies, ``seed`` for its random signings past 16 people)."""
     ref = next((m.scores for m in methods if m.name == best), None)
     if ref is None:
         return methods
@@ -115,6 +147,8 @@ def with_mcnemar(methods: list[MethodResult], best: str | None) -> list[MethodRe
             cur = np.array(m.scores.correct)
             b, c = int((right & ~cur).sum()), int((~right & cur).sum())
             test = McNemar(str(best), b, c, mcnemar_exact(b, c))
-            m = dataclasses.replace(m, scores=dataclasses.replace(m.scores, mcnemar=test))
+            people = _signed_rank(ref, m.scores, str(best), seed)
+            scores = dataclasses.replace(m.scores, mcnemar=test, wilcoxon=people)
+            m = dataclasses.replace(m, scores=scores)
         out.append(m)
     return out

@@ -59,6 +59,29 @@ def _legend(results: CompareResults, person: bool) -> list[str]:
     return [what, f"macro-F1's 95 % interval: bootstrap over {drawn}"]
 
 
+def _people(results: CompareResults, width: int) -> list[str]:
+    """Under leave-one-subject-out, the figures whose unit is the person: the accuracy's
+    bootstrap interval over the subjects and Wilcoxon's test of their accuracies against the
+    best (n: the subjects whose accuracies differ); none without."""
+    ok = [(m, s) for m, s in results.scored() if s.accuracy_ci_people is not None]
+    if not ok:
+        return []
+    head = f"{'method':<{width}} {'accuracy % [95 % CI over people]':<33} {'Wilcoxon p (n)':>14}"
+    lines = ["", head, "-" * len(head)]
+    for m, s in ok:
+        lo, hi = s.accuracy_ci_people or (math.nan, math.nan)
+        acc = f"{100 * s.accuracy:5.1f} [{100 * lo:4.1f}, {100 * hi:5.1f}]"
+        w = s.wilcoxon
+        pv = "best" if m.name == results.best else "" if w is None else f"{p_value(w.p)} ({w.n})"
+        lines.append(f"{m.name:<{width}} {acc:<33} {pv:>14}".rstrip())
+    n = len(ok[0][1].per_subject)
+    return lines + [
+        f"people as the unit: the accuracy's 95 % bootstrap over the {n} subjects held out;",
+        "Wilcoxon's signed-rank test of their accuracies against the best (n: the subjects",
+        "whose accuracies differ; n subjects cannot give p below 2/2^n, 0.25 for 3, 0.0625 for 5)",
+    ]
+
+
 def _costs(results: CompareResults, width: int) -> list[str]:
     """Training and prediction time and case-base size of every method that ran."""
     head = f"{'method':<{width}} {'fit s':>9} {'ms/clip':>9} {'cases':>7}"
@@ -73,8 +96,9 @@ def _costs(results: CompareResults, width: int) -> list[str]:
 
 def format_table(results: CompareResults) -> str:
     """The comparison as a plain-text table in method order (``*``: best interpretable; the
-    accuracy per person under leave-one-subject-out), what it holds, the costs (time, case
-    base) of each method, then the accuracy per model group when there are groups."""
+    accuracy per person under leave-one-subject-out), what it holds, the figures whose unit
+    is the person (leave-one-subject-out), the costs (time, case base) of each method, then
+    the accuracy per model group when there are groups."""
     # the method column holds the longest name with its " *" ("cbr fluents/euclidean *": 23)
     width = max([22, *(len(m.name) + 2 for m in results.methods)])
     person = any(s.per_subject for _, s in results.scored())
@@ -89,7 +113,7 @@ def format_table(results: CompareResults) -> str:
             lines.append(f"{m.name:<{width}} {m.status}: {m.message}")
         else:
             lines.append(_row(results, m, m.scores, width, person))
-    lines += _legend(results, person)
+    lines += _legend(results, person) + _people(results, width)
     if results.scored():
         lines += _costs(results, width)
     return "\n".join(lines + group_table(results))
@@ -131,6 +155,11 @@ def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
         "mcnemar_p": None if s.mcnemar is None else s.mcnemar.p,
         "mcnemar_vs": None if s.mcnemar is None else s.mcnemar.versus,
     }
+    people = s.accuracy_ci_people
+    row["accuracy_people_lo"] = None if people is None else round(people[0], 6)
+    row["accuracy_people_hi"] = None if people is None else round(people[1], 6)
+    row["wilcoxon_p"] = None if s.wilcoxon is None else s.wilcoxon.p
+    row["wilcoxon_n"] = None if s.wilcoxon is None else s.wilcoxon.n
     spread = s.subject_spread()
     for key, v in zip(("mean", "sd", "min", "max"), spread or (None,) * 4, strict=True):
         # NaN (one subject's sd) as an empty cell, as a figure of a row that did not run
@@ -145,11 +174,13 @@ def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
 
 def csv_rows(results: CompareResults) -> list[dict[str, Any]]:
     """One row per method: the table's figures (``mcnemar_vs``: the best method, tested
-    against; ``person_mean``, ``person_sd``, ``person_min``, ``person_max``: the accuracy
-    over the subjects held out, empty under k-fold), per-class recall (``recall:CLASS``),
-    with model groups the accuracy per group printed under the table (``accuracy:GROUP``),
-    the accuracy per subject held out (``subject:SUBJECT``); ``message`` for one that did
-    not run."""
+    against; ``accuracy_people_lo``, ``accuracy_people_hi``: the accuracy's bootstrap
+    interval over the subjects held out, ``wilcoxon_p``, ``wilcoxon_n``: Wilcoxon's test
+    over them against the best; ``person_mean``, ``person_sd``, ``person_min``,
+    ``person_max``: the accuracy over the subjects held out; all empty under k-fold),
+    per-class recall (``recall:CLASS``), with model groups the accuracy per group printed
+    under the table (``accuracy:GROUP``), the accuracy per subject held out
+    (``subject:SUBJECT``); ``message`` for one that did not run."""
     rows = []
     for m in results.methods:
         row: dict[str, Any] = {
