@@ -28,7 +28,7 @@ from features.text import shown, spelt_as
 
 from .casebase import frames_of, piece_fields, piece_name, skeleton_of, subject_of
 from .described import poses_digest
-from .estimator import CaseBaseClassifier, Solved, too_short, unusable
+from .estimator import CaseBaseClassifier, Solved, too_short, unclassifiable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
 from .revise import Revision, plan_revision, record_revision
@@ -84,6 +84,7 @@ class Classification:
             out["unlike_cases"] = self.solved.unlike_cases
             out["unlike_reason"] = self.solved.unlike_reason or None
             out["torso_share"] = self.solved.torso_share
+            out["arms_alone"] = self.solved.arms_alone
         else:
             out.update(label=None, unclassifiable=self.unclassifiable)
         # null when the clip has no label, so every record holds both keys (a script reading
@@ -123,7 +124,7 @@ def _solve_all(clf: CaseBaseClassifier, clips: Sequence[PoseSequence]) -> list[S
         rest = [i for i in range(len(clips)) if i not in short]
         solved = iter(_solve_all(clf, [clips[i] for i in rest]) if rest else [])
         return [short[i] if i in short else next(solved) for i in range(len(clips))]
-    bad = set(unusable(clips))
+    bad = set(unclassifiable(clips))
     good = [c for i, c in enumerate(clips) if i not in bad]
     try:
         solved = iter(clf.solve(good) if good else [])

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from features.body import no_person, torso_share
+from features.body import arms_alone, no_person, torso_share
 from features.errors import ConfigError, DataError, InputError, ParameterError
 from features.poses import PoseSequence
 from features.progress import progress
@@ -226,6 +226,14 @@ def unusable(seqs: Sequence[PoseSequence]) -> list[int]:
     return [i for i, s in enumerate(seqs) if torso_share(s) == 0.0]
 
 
+def unclassifiable(seqs: Sequence[PoseSequence]) -> list[int]:
+    """Positions of the clips :func:`unusable` that show no arms either: a clip with the hips
+    out of view (:func:`features.body.arms_alone`) is classified on what it shows, its arms
+    and head measured in the frame of its shoulders (:data:`features.signals.HIPLESS`), the
+    columns it never shows left out of its distance."""
+    return [i for i in unusable(seqs) if not arms_alone(seqs[i])]
+
+
 def too_short(clip: PoseSequence, what: str = "classify") -> str | None:
     """Why ``clip`` is too short to classify, or to learn from (``what``), None when it is
     not: it lasts less than one movement can (:data:`features.repetitions.MIN_PERIOD_S`); a
@@ -256,7 +264,8 @@ class Solved:
     cases (calibrated per case base; ``unlike_reason`` "distance", "features" or "sensor", see
     :mod:`cbr.novelty`); ``torso_share``: the share of its frames that show the person;
     ``description``: what the flag's feature score judged (its fluent summary ``(F,)``, or its
-    problem's values when the case base judges its problems)."""
+    problem's values when the case base judges its problems); ``arms_alone``: it shows no
+    hip in any frame and was judged on its arms alone (:func:`features.body.arms_alone`)."""
 
     problem: Problem
     retrieval: Retrieval
@@ -266,6 +275,7 @@ class Solved:
     torso_share: float
     unlike_reason: str = ""
     description: np.ndarray | None = None
+    arms_alone: bool = False
 
 
 @dataclass(frozen=True)
@@ -1127,7 +1137,7 @@ class CaseBaseClassifier(Classifier):
         seqs = as_sequences(X)
         if not seqs:
             raise InputError("no clips to classify", "X")
-        bad = unusable(seqs)
+        bad = unclassifiable(seqs)
         if bad:
             seq = seqs[bad[0]]
             raise InputError(f"{no_person(seq)}: nothing to classify", seq.source or f"X[{bad[0]}]")
@@ -1163,7 +1173,9 @@ class CaseBaseClassifier(Classifier):
             seen = self._description(seq, p) if flag else None
             reason = self.novelty_.reason(nearest, skeleton_of(seq), seen, s.label) if flag else ""
             ratio = self.novelty_.ratio(nearest)
-            out.append(Solved(p, r, s, ratio, bool(reason), torso_share(seq), reason, seen))
+            share = torso_share(seq)
+            alone = share == 0.0 and arms_alone(seq)
+            out.append(Solved(p, r, s, ratio, bool(reason), share, reason, seen, alone))
         return out
 
     def _description(self, seq: PoseSequence, p: Problem) -> np.ndarray:

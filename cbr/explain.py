@@ -938,14 +938,21 @@ def _short(
 def _head(solved: Solved, name: str, calibrated: bool) -> str:
     """The first line: the answer (``name``), its confidence (said to be the vote share when
     not ``calibrated``: no probability, the case base had nothing to calibrate it on), the
-    flag, and how little of the clip showed the person when under half."""
+    flag, and how little of the clip showed the person when under half (that it was judged on
+    the arms alone when no frame showed the hips)."""
     head = f"{name}, confidence {solved.solution.confidence:.2f}"
     if not calibrated:
         head += f" ({UNCALIBRATED.words})"
     head += unlike_words(solved)
-    if solved.torso_share < 0.5:
+    if solved.arms_alone:
+        head += f"; {ARMS_ALONE}"
+    elif solved.torso_share < 0.5:
         head += f"; person seen in {100 * solved.torso_share:.0f} % of the frames"
     return head
+
+
+ARMS_ALONE = "judged on the arms alone (the hips are seen in no frame)"
+"""What the answer for a clip without hips says (:attr:`cbr.estimator.Solved.arms_alone`)."""
 
 
 def unlike_words(solved: Solved) -> str:

@@ -58,7 +58,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from features.body import check_person, long_runs, majority, torso_rows, torso_share
+from features.body import (
+    arms_alone,
+    check_person,
+    long_runs,
+    majority,
+    shown_rows,
+    torso_share,
+)
 from features.derived import forget, movement_signals_of, stretch
 from features.errors import DataError, InputError, ParameterError
 from features.fluents import DEFAULT_TABLE, history_frames
@@ -457,6 +464,7 @@ def _solve_distinct(
     classes = np.array([str(c) for c in clf.classes_], dtype=object)
     codes = activity_codes(clf.case_base_.labels, classes)
     columns, least = least_movement(clf)
+    alone = shoulders_up(rec)
     cuts = _cut_in_pieces(rec, windows, chunk, clf.feature_config_) if chunk else (
         (i, stretch(rec, w.start, w.stop), None) for i, w in enumerate(windows)
     )  # fmt: skip
@@ -477,7 +485,7 @@ def _solve_distinct(
     for i, part, piece in progress(cuts, "classifying windows", len(windows), "window"):
         if batch and (len(batch) == BATCH or batch[0][2] != piece):
             flush()  # a piece's windows together: the piece is dropped once they are cut
-        if torso_share(part) > 0.0:
+        if torso_share(part) > 0.0 or (alone and arms_alone(part)):
             batch.append((i, part, piece))
     if batch:
         flush()
@@ -835,13 +843,21 @@ def sighting_width(fps: float) -> int:
     return median_width(fps, True)
 
 
+def shoulders_up(rec: PoseSequence) -> bool:
+    """Whether ``rec`` shows its person from the shoulders up only: no frame shows the torso
+    and its arms are seen (:func:`features.body.arms_alone`, the hips out of view). Its
+    windows that show the arms are labelled from them (:data:`features.signals.HIPLESS`),
+    and a stretch is nobody in view where the shoulders are not seen."""
+    return torso_share(rec) == 0.0 and arms_alone(rec)
+
+
 def nobody_blocks(rec: PoseSequence, n_blocks: int) -> np.ndarray:
     """``(n_blocks,)`` bool: the :data:`BLOCK_S` blocks of ``rec`` whose centre lies in a
     stretch of at least :data:`MIN_SEGMENT_S` in which no frame shows the person
     (:func:`sighting_width`: nor a glitch of the pose model; a segment of its own, and a
     shorter dropout of the pose model is not). Before, the person "seen" for two frames
     1/3 s into 3 s with nobody in view left the 1/3 s before them unknown."""
-    seen = majority(torso_rows(rec), sighting_width(rec.fps))
+    seen = majority(shown_rows(rec, shoulders_up(rec)), sighting_width(rec.fps))
     nobody = long_runs(~seen, MIN_SEGMENT_S * rec.fps)
     centres = ((np.arange(n_blocks) + 0.5) * rec.fps * BLOCK_S).astype(int)
     return np.asarray(nobody[np.minimum(centres, rec.n_frames - 1)])
@@ -1714,7 +1730,7 @@ def check_segmentable(recording: PoseSequence) -> None:
     several recordings refuses a bad one so before it segments any."""
     rec = recording.to_canonical()
     _check_duration(rec.n_frames, rec.fps, rec.source)
-    check_person(rec, "segment")  # every stretch would be nobody in view
+    check_person(rec, "segment", arms=True)  # every stretch would be nobody in view
     chunk = long_clip.chunk_for(rec, None)
     if chunk:
         long_clip.movement_signals(rec, chunk)
@@ -1750,7 +1766,7 @@ def solve_recording(
     _check_call(clf, recording, chunk_frames)
     check_k(clf, k)
     rec = recording.to_canonical()
-    check_person(rec, "segment")  # every stretch would be nobody in view
+    check_person(rec, "segment", arms=True)  # every stretch would be nobody in view
     chunk = long_clip.chunk_for(rec, chunk_frames)
     sig = long_clip.movement_signals(rec, chunk) if chunk else movement_signals_of(rec)
     windows = windows_of(sig, rec.n_frames, rec.fps, rec.source)

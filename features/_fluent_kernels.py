@@ -641,12 +641,15 @@ def _angle(u: Vec, v: Vec, min_len: float) -> float:
 @_compiled(cache=True, nogil=True)
 def state_signal_values(
     p: np.ndarray, joints: np.ndarray, near_a: np.ndarray, near_b: np.ndarray,
-    min_len: float, values: np.ndarray, head_length: np.ndarray, dist_m: np.ndarray,
+    min_len: float, hipless: bool, values: np.ndarray, head_length: np.ndarray,
+    dist_m: np.ndarray,
 ) -> None:  # fmt: skip
     """Fill the signals of :func:`features.signals.state_signals` from canonical positions.
 
     p: ``(frames, 33, 3)``; joints: canonical indices of (nose, left/right ear, shoulder,
-    elbow, wrist, hip, knee, ankle) in that order; near_a/near_b: ``(n_pairs,)`` joint indices.
+    elbow, wrist, hip, knee, ankle) in that order; near_a/near_b: ``(n_pairs,)`` joint indices;
+    hipless: the frame of the shoulders and the world's up (a clip without hips,
+    :func:`features.geometry.shoulder_axes`), the armpit angle from its down.
     Writes values ``(frames, 22 + n_pairs)`` (angles in ANGLE_SIGNALS order, then distances in
     head-lengths), head_length ``(frames,)`` metres and dist_m ``(frames, n_pairs)`` metres.
     """
@@ -659,9 +662,14 @@ def state_signal_values(
         neck = _mid(ls, rs)
         mid_hip = _mid(lh, rh)
         mid_ear = _mid(_get(p, f, joints[1]), _get(p, f, joints[2]))
-        forward = _unit(_cross(_sub(rs, ls), _sub(lh, ls)), min_len)
-        up = _unit(_sub(neck, mid_hip), min_len)
-        left = _unit(_cross(up, forward), min_len)
+        if hipless:
+            left = _unit(_sub(ls, rs), min_len)
+            up = _unit(_project(up_w, left), min_len)
+            forward = _unit(_cross(left, up), min_len)
+        else:
+            forward = _unit(_cross(_sub(rs, ls), _sub(lh, ls)), min_len)
+            up = _unit(_sub(neck, mid_hip), min_len)
+            left = _unit(_cross(up, forward), min_len)
         level_left = _unit(_project(left, up_w), min_len)
         heading = _unit(_cross(level_left, up_w), min_len)
         for side in range(2):
@@ -673,7 +681,8 @@ def state_signal_values(
             arm, leg = _sub(el, sh), _sub(kn, hip)
             values[f, 0 + side] = _angle(_sub(sh, el), _sub(wr, el), min_len)
             values[f, 2 + side] = _angle(_sub(hip, kn), _sub(an, kn), min_len)
-            values[f, 4 + side] = _angle(_sub(el, sh), _sub(hip, sh), min_len)
+            down = (-up[0], -up[1], -up[2]) if hipless else _sub(hip, sh)
+            values[f, 4 + side] = _angle(arm, down, min_len)
             values[f, 6 + side] = _angle(_sub(kn, hip), _sub(sh, hip), min_len)
             values[f, 8 + side] = _angle(_project(arm, left), forward, min_len)
             values[f, 10 + side] = _angle(_project(leg, left), forward, min_len)

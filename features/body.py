@@ -21,7 +21,7 @@ from .geometry import (
     WORLD_UP,
     angle_between,
     body_frame,
-    joint_angle,
+    hips_unseen,
     midpoint,
     norm,
     project,
@@ -83,16 +83,20 @@ def mirrored(seq: PoseSequence) -> PoseSequence:
 
 def arm_planes(seq: PoseSequence) -> np.ndarray:
     """Plane-of-elevation angles (radians) of the left and right upper arm, ``(frames, 2)``;
-    NaN where the arm is raised less than 45 degrees or joints are missing."""
+    NaN where the arm is raised less than 45 degrees or joints are missing. A clip without
+    hips: in the frame of its shoulders and the world's up, raised from that frame's down
+    (:data:`features.signals.HIPLESS`)."""
 
     def compute(s: PoseSequence) -> np.ndarray:
         p = s.to_canonical().positions
-        bf = body_frame(p)
+        hipless = hips_unseen(p)  # the frame of the shoulders and the world's up
+        bf = body_frame(p, hipless)
         cols = []
         for side in ("left", "right"):
             sh, el, hip = (p[:, JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "hip"))
             plane = angle_between(project(el - sh, bf.up), bf.forward)
-            raised = joint_angle(el, sh, hip) >= _ARM_PLANE_MIN_ELEVATION
+            trunk = -bf.up if hipless else hip - sh  # as the armpit angle reads it
+            raised = angle_between(el - sh, trunk) >= _ARM_PLANE_MIN_ELEVATION
             cols.append(np.where(raised, plane, np.nan))
         return np.stack(cols, axis=1)
 
@@ -402,6 +406,17 @@ def arms_alone(seq: PoseSequence) -> bool:
     return bool((shoulders & seen[:, 4:].any(axis=-1)).any())
 
 
+def shown_rows(seq: PoseSequence, alone: bool) -> np.ndarray:
+    """``(frames,)`` whether each frame shows the person: the torso (:func:`torso_rows`),
+    or, of a recording shown from the shoulders up (``alone``: :func:`arms_alone` with no
+    frame showing the torso), both shoulders, distinct, as the frame of the shoulders and the
+    world's up needs (:func:`features.geometry.shoulder_axes`)."""
+    if not alone:
+        return torso_rows(seq)
+    sh = seq.to_canonical().joints(("left_shoulder", "right_shoulder"))
+    return np.asarray(norm(sh[:, 0] - sh[:, 1]) >= MIN_LINK_M)  # NaN (not seen): False
+
+
 def check_person(seq: PoseSequence, nothing_to: str, arms: bool = False) -> None:
     """Refuse ``seq`` (a DataError naming its source) when no frame of it shows the person:
     the torso, without which no angle or position has a body frame (:func:`torso_share` 0;
@@ -410,7 +425,7 @@ def check_person(seq: PoseSequence, nothing_to: str, arms: bool = False) -> None
     knees, one at micrometre scale from the hips' height, where ``segment`` refused it);
     ``nothing_to``: what the refusal says cannot be done ("segment", "count"). ``arms``:
     a recording that shows the arms without the hips (:func:`arms_alone`) passes, ``reps``
-    counting an arm exercise filmed close up from the arms alone (it was refused as showing
-    no person)."""
+    counting an arm exercise filmed close up from the arms alone, ``segment`` labelling it
+    from its arms (it was refused as showing no person)."""
     if torso_share(seq) == 0.0 and not (arms and arms_alone(seq)):
         raise DataError(f"{no_person(seq)}: nothing to {nothing_to}", seq.source or None)

@@ -1,4 +1,6 @@
 """Body frame, plane projections and law-of-cosines angles, vectorised over all frames.
+A clip that shows neither hip has its frame from the shoulders and the world's up
+(:func:`shoulder_axes`).
 
 Conventions (canonical skeleton): metres, right-handed, y up. For a person, the unit vectors
 (forward, left, up) form a right-handed basis: ``left = up x forward``.
@@ -92,8 +94,12 @@ class BodyFrame:
     mid_ear: np.ndarray
 
 
-def body_frame(positions: np.ndarray) -> BodyFrame:
-    """Body axes from canonical positions ``(frames, 33, 3)``."""
+def body_frame(positions: np.ndarray, hipless: bool = False) -> BodyFrame:
+    """Body axes from canonical positions ``(frames, 33, 3)``.
+
+    ``hipless``: the frame of a clip that shows neither hip (:func:`hips_unseen`), from the
+    shoulders and the world's up (:func:`shoulder_axes`); its ``mid_hip`` stays NaN, so
+    nothing measured from the hips is stated."""
     ls = _joint(positions, "left_shoulder")
     rs = _joint(positions, "right_shoulder")
     lh = _joint(positions, "left_hip")
@@ -101,10 +107,36 @@ def body_frame(positions: np.ndarray) -> BodyFrame:
     neck = midpoint(ls, rs)
     mid_hip = midpoint(lh, rh)
     mid_ear = midpoint(_joint(positions, "left_ear"), _joint(positions, "right_ear"))
-    # -⊥torso = (LS→RS) × (LS→LH): the chest-facing normal in a right-handed frame.
-    forward = unit(np.cross(rs - ls, lh - ls))
-    up = unit(neck - mid_hip)
-    left = unit(np.cross(up, forward))
+    if hipless:
+        forward, up, left = shoulder_axes(ls, rs)
+    else:
+        # -⊥torso = (LS→RS) × (LS→LH): the chest-facing normal in a right-handed frame.
+        forward = unit(np.cross(rs - ls, lh - ls))
+        up = unit(neck - mid_hip)
+        left = unit(np.cross(up, forward))
     level_left = unit(project(left, WORLD_UP))
     heading = unit(np.cross(level_left, WORLD_UP))
     return BodyFrame(forward, up, left, heading, level_left, neck, mid_hip, mid_ear)
+
+
+def shoulder_axes(ls: np.ndarray, rs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body axes (forward, up, left) ``(frames, 3)`` each from the shoulders ``(frames, 3)``
+    and the world's up, for a clip without hips: ``left`` along the shoulder line (right to
+    left shoulder), ``up`` the world's up less its part along that line (the trunk taken to
+    be upright: a patient seated, or standing, filmed by an upright camera), ``forward`` their
+    cross product (``left × up``, the way the chest faces). The hips' frame has ``left``
+    along the shoulders too (``up × forward`` of the torso's plane); what the shoulders cannot
+    give is the trunk's lean forward or back, which this frame reads as none. NaN where a
+    shoulder is missing or the shoulder line is vertical."""
+    left = unit(ls - rs)
+    up = unit(project(np.broadcast_to(WORLD_UP, left.shape), left))
+    forward = unit(np.cross(left, up))
+    return forward, up, left
+
+
+def hips_unseen(positions: np.ndarray) -> bool:
+    """Whether canonical positions ``(frames, 33, 3)`` show neither hip in any frame (the
+    hips out of view below a close-up's bottom edge): the body frame is then taken from the
+    shoulders (:func:`shoulder_axes`). One hip seen in some frame is no such clip."""
+    hips = positions[:, [JOINT_INDEX["left_hip"], JOINT_INDEX["right_hip"]], :]
+    return not bool(np.isfinite(hips).all(axis=-1).any())

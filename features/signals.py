@@ -15,7 +15,15 @@ import numpy as np
 
 from features.errors import ConfigError
 
-from .geometry import MIN_LINK_M, angle_between, body_frame, joint_angle, norm, project
+from .geometry import (
+    MIN_LINK_M,
+    angle_between,
+    body_frame,
+    hips_unseen,
+    joint_angle,
+    norm,
+    project,
+)
 from .poses import PoseSequence, expect_sequence
 from .skeleton import JOINT_INDEX
 
@@ -98,6 +106,20 @@ ANGLE_SIGNALS: tuple[str, ...] = tuple(
 )
 
 
+HIPLESS: tuple[str, ...] = tuple(
+    f"{side}_{part}"
+    for part in ("armpit", "upper_arm_sagittal", "upper_arm_frontal")
+    for side in SIDES
+) + ("neck_sagittal", "neck_frontal", "neck_transverse")
+"""The angles stated of a clip that shows neither hip, in the frame of its shoulders and the
+world's up (:func:`features.geometry.shoulder_axes`: the trunk taken to be upright), where
+the hips' body frame has none: the arm's raise (the armpit angle from the frame's down, the
+trunk's line without a hip to draw it to), its direction forward and outward, and the head's
+tilts and twist. The elbows and the near distances need no frame and are stated as for any
+clip; the legs, the hip angles and the trunk's tilts and twist need the hips and stay
+unavailable."""
+
+
 @dataclass(frozen=True, eq=False)
 class StateSignals:
     """Angles (rad) and near distances (head-lengths), ``values``: ``(frames, len(names))``.
@@ -120,9 +142,10 @@ class StateSignals:
         return self.values[:, self.names.index(name)]
 
 
-def _angles(p: np.ndarray) -> np.ndarray:
-    """All angle signals, ``(frames, len(ANGLE_SIGNALS))``, from positions ``(frames, 33, 3)``."""
-    bf = body_frame(p)
+def _angles(p: np.ndarray, hipless: bool) -> np.ndarray:
+    """All angle signals, ``(frames, len(ANGLE_SIGNALS))``, from positions ``(frames, 33, 3)``;
+    ``hipless``: in the frame of the shoulders and the world's up (:data:`HIPLESS`)."""
+    bf = body_frame(p, hipless)
 
     def j(name: str) -> np.ndarray:
         return p[:, JOINT_INDEX[name], :]
@@ -141,7 +164,10 @@ def _angles(p: np.ndarray) -> np.ndarray:
         upper_arm, upper_leg = el - sh, knee - hip
         cols[f"{side}_elbow"] = joint_angle(sh, el, wr)
         cols[f"{side}_knee"] = joint_angle(hip, knee, ankle)
-        cols[f"{side}_armpit"] = joint_angle(el, sh, hip)
+        # without the hips, the trunk's line from the shoulder is the frame's down
+        cols[f"{side}_armpit"] = (
+            angle_between(upper_arm, -bf.up) if hipless else joint_angle(el, sh, hip)
+        )
         cols[f"{side}_hip"] = joint_angle(knee, hip, sh)
         cols[f"{side}_upper_arm_sagittal"] = angle_between(project(upper_arm, bf.left), bf.forward)
         cols[f"{side}_upper_leg_sagittal"] = angle_between(project(upper_leg, bf.left), bf.forward)
@@ -180,13 +206,16 @@ _KERNEL_JOINTS = np.array(
 
 
 def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba") -> StateSignals:
-    """Every fluent's angle and distance for every frame of ``seq`` (any joint set).
+    """Every fluent's angle and distance for every frame of ``seq`` (any joint set). A clip
+    that shows neither hip in any frame (:func:`features.geometry.hips_unseen`) is measured
+    in the frame of its shoulders and the world's up (:data:`HIPLESS`).
 
     ``backend``: ``"numba"`` one compiled pass over the frames
     (:func:`features._fluent_kernels.state_signal_values`), ``"numpy"`` the whole-array
     reference built from :mod:`features.geometry`.
     """
     p = expect_sequence(seq).to_canonical().positions
+    hipless = hips_unseen(p)
     if backend == "numba":
         from ._fluent_kernels import state_signal_values
 
@@ -196,12 +225,20 @@ def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba
         head_length = np.empty(frames)
         dist_m = np.empty((frames, len(NEAR_SIGNALS)))
         state_signal_values(
-            p, _KERNEL_JOINTS, _NEAR_A, _NEAR_B, MIN_LINK_M, values, head_length, dist_m
+            p,
+            _KERNEL_JOINTS,
+            _NEAR_A,
+            _NEAR_B,
+            MIN_LINK_M,
+            hipless,
+            values,
+            head_length,
+            dist_m,
         )
         return StateSignals(ANGLE_SIGNALS + NEAR_SIGNALS, values, seq.fps, head_length, dist_m)
     if backend != "numpy":
         raise ConfigError(f"unknown signal backend {backend!r} (known: numba, numpy)")
-    angles = _angles(p)
+    angles = _angles(p, hipless)
     mid_ear = 0.5 * (p[:, JOINT_INDEX["left_ear"]] + p[:, JOINT_INDEX["right_ear"]])
     neck = 0.5 * (p[:, JOINT_INDEX["left_shoulder"]] + p[:, JOINT_INDEX["right_shoulder"]])
     # a degenerate neck -> mid-ear link (shorter than MIN_LINK_M, as for every angle's links)

@@ -254,3 +254,37 @@ def test_each_step_of_the_counterfactual_search_votes_once(
     assert len(steps) <= cfm.MAX_CHANGES
     # then one vote per change tried away (a winner of s changes: at most s)
     assert len(calls) - len(steps) <= len(steps)
+
+
+def test_arm_exercises_with_the_hips_out_of_view_are_classified(
+    uiprmd: tuple, fitted: Callable[[str, str], Any]
+) -> None:
+    """A held-out subject's shoulder abduction, extension and scaption (s06, episode 1,
+    correct and incorrect) with the hips and everything below them missing in every frame, as
+    a close-up leaves them, against the case base of s01-s05's whole-body clips: each is
+    classified as its movement, from its arms (in the frame of its shoulders and the world's
+    up), and the answer says it was judged on the arms alone. On main's code each was refused
+    ("shows no torso"). Measured over s06-s08's odd episodes (90 clips): 78 right without the
+    hips, 83 with them (docs/measurements.md, hunt 53g)."""
+    from features.skeleton import JOINT_INDEX
+
+    below = [i for n, i in JOINT_INDEX.items()
+             if n.split("_", 1)[-1] in {"hip", "knee", "ankle", "heel", "foot_index"}]  # fmt: skip
+    _, _, Xte, yte = uiprmd
+    arms = ("m07", "m08", "m10")
+    names = [Path(x.source).name for x in Xte]
+    picked = [(x, y) for x, y, n in zip(Xte, yte, names, strict=True)
+              if n[:3] in arms and "_s06_e01_" in n]  # fmt: skip
+    assert len(picked) == 6  # three movements, correct and incorrect
+    hipless = []
+    for x, _ in picked:
+        c = x.to_canonical()
+        p = c.positions.copy()
+        p[:, below] = np.nan
+        hipless.append(replace(c, positions=p))
+    solved = fitted(*SHARED).solve(hipless)
+    assert [s.solution.label for s in solved] == [y for _, y in picked]
+    assert all(s.arms_alone and s.torso_share == 0.0 for s in solved)
+    from cbr.explain import ARMS_ALONE, _head  # the answer's first line
+
+    assert ARMS_ALONE in _head(solved[0], "x", True)

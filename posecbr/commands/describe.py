@@ -162,15 +162,17 @@ def _nothing_to_describe(missing: str, where: Path) -> DataError:
 def _no_torso_line(missing: str, arms: bool) -> str:
     """The line saying what a clip without a torso is described by (``missing``: the torso
     joints it lacks, :func:`_missing_torso`; ``arms``: its arms are seen without the hips,
-    :func:`features.body.arms_alone`, and ``reps`` counts them)."""
-    refused = (
-        "classify and segment refuse the clip, reps counts the arms alone"
-        if arms
-        else "classify, reps and segment refuse the clip"
-    )
+    :func:`features.body.arms_alone`: described in the frame of the shoulders,
+    :data:`features.signals.HIPLESS`, and judged on them)."""
+    if arms:
+        return (
+            f"no torso ({missing} missing in every frame): the arms and head are described in"
+            " the frame of the shoulders and the world's up, nothing that needs the hips"
+            " (classify, segment and reps judge the arms alone)"
+        )
     return (
         f"no torso ({missing} missing in every frame): no body frame, so only the states that"
-        f" need none are described ({refused})"
+        " need none are described (classify, reps and segment refuse the clip)"
     )
 
 

@@ -468,7 +468,7 @@ def run(args: argparse.Namespace) -> int:
     _inputs_given(args)
     overlays = _outputs(args)
     stored = load_case_base(args.db, args.name)  # a case base file not there: before the imports
-    from cbr.segmentation import check_segmentable, segment
+    from cbr.segmentation import check_segmentable, segment, shoulders_up
 
     clf = stored.classifier
     check_k_option(clf, args.k)  # before any recording is read (a video's poses take seconds)
@@ -485,8 +485,14 @@ def run(args: argparse.Namespace) -> int:
         check_segmentable(rec)
     truths = _fitted_truths(args, labels, [rec for rec, _ in read])
     note_assumed_rates(assumed_rates(rec for rec, _ in read))  # one line for them all
-    for rec, _ in read:
+    for (rec, _), path in zip(read, args.recordings, strict=True):
         note_low_rate(rec.source, rec.fps, rec.confidence is not None)
+        if shoulders_up(rec):  # as reps says it: the labels stand on the arms alone
+            print(
+                f"note: {shown(path)}: the hips are seen in no frame (out of view): labelled"
+                " from the arms alone",
+                file=sys.stderr,
+            )
     done = [
         (rec, video, _named(segment(clf, rec, judge, k=args.k), path))
         for (rec, video), path in zip(read, args.recordings, strict=True)
