@@ -11,6 +11,7 @@ its repetitions (``--split repetitions``), nor a recording into its labelled str
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,7 @@ from tests.test_repetitions import _movement
 from tests.test_segment import NAMES, _cmu
 
 CODES = dict(line.split(" ", 1) for line in NAMES.splitlines())
+SQUATS = "squat/tfjs_pose_squats_pexels4838220.mp4"  # 65 frames at 5 fps, three squats
 
 
 @pytest.fixture(scope="module")
@@ -142,30 +144,17 @@ def test_a_recording_cut_in_python_stores_the_cases_train_stores(
     assert len(docs[0]["segments"]) > 1
 
 
-@pytest.fixture(scope="module")
-def squat_poses(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The bundled squat video's poses (65 frames at 5 fps, three squats), extracted once."""
-
-    def make(folder: Path) -> Path:
-        video = shared_data / "videos" / "squat" / "tfjs_pose_squats_pexels4838220.mp4"
-        assert main(["extract", str(video), "--out", str(folder)]) == 0
-        (path,) = folder.glob("*.npz")
-        return path
-
-    return made_once(tmp_path_factory, "hunt38k-squat-poses", make)
-
-
 def test_clips_cut_into_repetitions_in_python_store_the_cases_train_stores(
-    squat_poses: Path, tmp_path: Path
+    bundled_poses: Callable[[str], PoseSequence], tmp_path: Path
 ) -> None:
-    """A folder per activity: the squat video's poses (three squats) and arms raised four
-    times (by construction). ``posecbr train --split repetitions`` and ``cut`` +
-    ``train(cases="repetitions")`` store the same seven cases: 3 squats, 4 raises."""
+    """A folder per activity: the squat video's poses (three squats; the session's poses of
+    it, as ``extract`` finds them) and arms raised four times (by construction). ``posecbr
+    train --split repetitions`` and ``cut`` + ``train(cases="repetitions")`` store the same
+    seven cases: 3 squats, 4 raises."""
     data = tmp_path / "data"
     (data / "squat").mkdir(parents=True)
     (data / "raise").mkdir()
-    squats = data / "squat" / "squats.npz"
-    squats.write_bytes(squat_poses.read_bytes())
+    squats = save_pose(bundled_poses(SQUATS), data / "squat" / "squats.npz")
     raises = save_pose(_movement(["both"] * 4), data / "raise" / "raises.npz")
     by_command, by_python = tmp_path / "command.sqlite", tmp_path / "python.sqlite"
     assert main(["train", str(data), "--split", "repetitions", "--db", str(by_command)]) == 0
