@@ -71,6 +71,8 @@ DEMO = Path(__file__).resolve().parents[1] / "posecbr" / "demo_data" / "uiprmd"
 #: the side handling, feature weights and phases fixed, not chosen by leave-one-subject-out
 #: inside the clips (half of a train's time): the matrices' files are these tests' point
 FIXED = ["--mirror", "off", "--feature-weights", "none", "--phases", "0"]
+#: three of the demo's ten movements: 6 clips of each a subject
+THREE = ["--labels", "deep_squat,hurdle_step,sit_to_stand"]
 
 
 def _name_hash(name: str) -> str:
@@ -96,13 +98,14 @@ def test_a_replaced_case_base_leaves_no_matrix_file_in_either_naming(
     whose name has the same file name), and when the new case base was too small to be
     mapped nothing was swept at all. Now both go; the files of "a_b" (the same file name as
     "a b", old naming too) and files not named as matrices are left alone."""
-    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 100)  # the demo's 120 are large
+    # THREE's 36 clips of s01 and s02 are large
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 30)
     db = tmp_path / "cb.sqlite"
     folder = tmp_path / "cb.sqlite.matrices"
     labels = str(DEMO / "labels.csv")
     for name in ("a b", "a_b"):
         argv = ["train", labels, "--db", str(db), "--name", name, "--subjects", "s01,s02"]
-        assert main([*argv, *FIXED]) == 0
+        assert main([*argv, *FIXED, *THREE]) == 0
     for p in folder.iterdir():  # as posecbr 0.2 named them
         p.rename(folder / re.sub(r"~[0-9a-f]{12}\.", ".", p.name))
     old, _ = _uid(db, "a b")
@@ -113,9 +116,9 @@ def test_a_replaced_case_base_leaves_no_matrix_file_in_either_naming(
     for n in keep:
         (folder / n).write_text("mine", encoding="utf-8")
     assert _files(folder) == sorted(legacy["a b"] + legacy["a_b"] + keep)
-    # replaced by a case base too small to be mapped (the 60 clips of s01)
+    # replaced by a case base too small to be mapped (the 18 clips of s01)
     argv = ["train", labels, "--db", str(db), "--name", "a b", "--subjects", "s01", "--replace"]
-    argv += FIXED
+    argv += [*FIXED, *THREE]
     assert main(argv) == 0
     assert _files(folder) == sorted(legacy["a_b"] + keep)
     # replaced again by a large one: only its own files are added
@@ -133,16 +136,16 @@ def test_a_trim_below_the_mapped_size_removes_the_matrices_it_made_stale(
 ) -> None:
     """A case base trimmed below the size that is mapped left its old version's matrices
     (read by nothing, as large as the case base) beside the database; now they go."""
-    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 100)
+    monkeypatch.setattr(stored_module, "MAPPED_MIN_CASES", 30)  # THREE's 36 clips of s01, s02
     db = tmp_path / "cb.sqlite"
     folder = tmp_path / "cb.sqlite.matrices"
     argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02"]
-    assert main([*argv, *FIXED]) == 0
+    assert main([*argv, *FIXED, *THREE]) == 0
     uid, _ = _uid(db, "default")
     assert len(_files(folder)) == 2
     assert main(["casebase", "trim", "--db", str(db), "--keep", "0.5"]) == 0
     with open_store(db, readonly=True) as store:
-        assert store.count_cases("default") == 60 and store.get_case_base("default").version == 2
+        assert store.count_cases("default") == 18 and store.get_case_base("default").version == 2
     assert _files(folder) == []
     capsys.readouterr()
 
