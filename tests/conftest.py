@@ -153,6 +153,26 @@ def side_plank_reps(shared_data: Path, tmp_path_factory: pytest.TempPathFactory)
 
 
 @pytest.fixture(scope="session")
+def seen_windows(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A case base of ``train --split windows`` on three movements of the demo's subjects
+    s01 and s02 (deep squat, standing shoulder abduction, side lunge), made once in the
+    session: tests/test_stored_judges.py and tests/test_spread_default.py read or copy it."""
+
+    def make(root: Path) -> Path:
+        from posecbr.cli import main
+
+        db = root / "cb.sqlite"
+        labels = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
+        seen = "deep_squat,standing_shoulder_abduction,side_lunge"
+        argv = ["train", str(labels), "--db", str(db), "--subjects", "s01,s02", "--labels", seen,
+                "--split", "windows"]  # fmt: skip
+        assert main(argv) == 0
+        return db
+
+    return made_once(tmp_path_factory, "seen-windows", make)
+
+
+@pytest.fixture(scope="session")
 def swapped_compare(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, dict[str, str]]:
     """One ``compare --out`` on ten demo clips with their labels swapped
     (``tests/test_compare_bad_input.py``): the labels file, the results folder, and the

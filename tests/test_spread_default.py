@@ -28,20 +28,13 @@ from posecbr.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
-SEEN = "deep_squat,standing_shoulder_abduction,side_lunge"
-
-
-# on one xdist worker: the module's trained made once, not once per worker
-pytestmark = pytest.mark.xdist_group("spread_default")
 
 
 @pytest.fixture(scope="module")
-def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
-    argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02",
-            "--labels", SEEN, "--split", "windows"]  # fmt: skip
-    assert main(argv) == 0
-    return db
+def trained(seen_windows: Path) -> Path:
+    """``train --split windows`` on s01 and s02's deep squat, standing shoulder abduction and
+    side lunge (tests/conftest.py's seen_windows, made once in the session)."""
+    return seen_windows
 
 
 def _load(db: Path) -> object:

@@ -68,12 +68,9 @@ def _model(db: Path) -> dict[str, object]:
 
 
 @pytest.fixture(scope="module")
-def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
-    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02", "--labels", SEEN,
-            "--split", "windows"]  # fmt: skip
-    assert main(argv) == 0
-    return db
+def trained(seen_windows: Path) -> Path:
+    """``train --split windows`` on s01 and s02's SEEN (tests/conftest.py, made once)."""
+    return seen_windows
 
 
 @pytest.fixture(scope="module")
