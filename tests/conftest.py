@@ -152,11 +152,9 @@ def side_plank_reps(shared_data: Path, tmp_path_factory: pytest.TempPathFactory)
     return made_once(tmp_path_factory, "side-plank-reps", make)
 
 
-@pytest.fixture(scope="session")
-def seen_windows(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A case base of ``train --split windows`` on three movements of the demo's subjects
-    s01 and s02 (deep squat, standing shoulder abduction, side lunge), made once in the
-    session: tests/test_stored_judges.py and tests/test_spread_default.py read or copy it."""
+def _seen(factory: pytest.TempPathFactory, split: str) -> Path:
+    """``train --split SPLIT`` on three movements of the demo's subjects s01 and s02 (deep
+    squat, standing shoulder abduction, side lunge), made once in the session."""
 
     def make(root: Path) -> Path:
         from posecbr.cli import main
@@ -165,11 +163,25 @@ def seen_windows(tmp_path_factory: pytest.TempPathFactory) -> Path:
         labels = ROOT / "posecbr" / "demo_data" / "uiprmd" / "labels.csv"
         seen = "deep_squat,standing_shoulder_abduction,side_lunge"
         argv = ["train", str(labels), "--db", str(db), "--subjects", "s01,s02", "--labels", seen,
-                "--split", "windows"]  # fmt: skip
+                "--split", split]  # fmt: skip
         assert main(argv) == 0
         return db
 
-    return made_once(tmp_path_factory, "seen-windows", make)
+    return made_once(factory, f"seen-{split}", make)
+
+
+@pytest.fixture(scope="session")
+def seen_windows(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """:func:`_seen`'s case base of windows: tests/test_stored_judges.py and
+    tests/test_spread_default.py read or copy it."""
+    return _seen(tmp_path_factory, "windows")
+
+
+@pytest.fixture(scope="session")
+def seen_clips(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """:func:`_seen`'s case base of whole clips (train's default for clips):
+    tests/test_stored_judges.py and tests/test_hunt38d.py read or copy it."""
+    return _seen(tmp_path_factory, "clips")
 
 
 @pytest.fixture(scope="session")

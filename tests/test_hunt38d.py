@@ -37,8 +37,6 @@ DEMO = ROOT / "posecbr" / "demo_data" / "uiprmd"
 SEEN = "standing_shoulder_abduction,deep_squat,side_lunge"
 ACTIVITIES = ["deep_squat", "side_lunge", "standing_shoulder_abduction"]  # sorted as text
 
-pytestmark = pytest.mark.xdist_group("hunt38d")  # one trained case base for the module
-
 #: The fields 9e02354 reads of each stored judge's record (listed in the test below).
 _ACTIVITY = {"thresholds", "pooled", "basis", "known", "false_unknown", "prior", "rate",
              "budget_thresholds", "floor", "reach"}  # fmt: skip
@@ -56,12 +54,10 @@ OLD_JUDGES_KEYS = {"case_base_version", "calibrated"}
 
 
 @pytest.fixture(scope="module")
-def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
-    argv = ["train", str(DEMO / "labels.csv"), "--db", str(db), "--subjects", "s01,s02",
-            "--labels", SEEN]  # fmt: skip
-    assert main(argv) == 0
-    return db
+def trained(seen_clips: Path) -> Path:
+    """Whole clips of SEEN's three movements of s01 and s02 (tests/conftest.py's seen_clips,
+    made once in the session)."""
+    return seen_clips
 
 
 def _model(db: Path) -> dict[str, Any]:

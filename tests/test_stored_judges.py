@@ -74,12 +74,10 @@ def trained(seen_windows: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
-def trained_clips(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """As ``trained``, a case per clip: feedback is given to case bases of whole clips."""
-    db = tmp_path_factory.mktemp("cb") / "cb.sqlite"
-    argv = ["train", str(LABELS), "--db", str(db), "--subjects", "s01,s02", "--labels", SEEN]
-    assert main(argv) == 0
-    return db
+def trained_clips(seen_clips: Path) -> Path:
+    """As ``trained``, a case per clip: feedback is given to case bases of whole clips
+    (tests/conftest.py, made once)."""
+    return seen_clips
 
 
 @pytest.fixture(scope="module")
