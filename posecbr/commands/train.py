@@ -1075,16 +1075,13 @@ def _skipped(
     order: those that show some of the torso's joints (the hips out of view) are said to
     show no torso, naming the joints, as ``classify`` and ``segment`` say it (they were said
     to show no person)."""
-    from features.repetitions import MIN_PERIOD_S
-
     whole = [n for n in short if n.rsplit(" (lasts ", 1)[0] in kept_whole]
     cut = [n for n in short if n not in whole]
-    shorter = f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
+    shorter = _shorter()
     why_none: dict[tuple[str, str], list[str]] = {}
-    reasons = no_torso if len(no_torso) == len(nobody) else [""] * len(nobody)
-    for name, why in zip(nobody, reasons, strict=True):
+    for name, why in zip(nobody, _skipped_reasons(nobody, [], no_torso), strict=True):
         kind = "clips" if name in kept_whole else split
-        why_none.setdefault((why or "shows no person", kind), []).append(name)
+        why_none.setdefault((why, kind), []).append(name)
     lines = [
         _listed(
             names, kind, "that " + (why if len(names) == 1 else why.replace("shows ", "show ", 1))
@@ -1097,6 +1094,24 @@ def _skipped(
         if names
     ]
     return "\n".join(lines)
+
+
+def _shorter() -> str:
+    """Why a piece shorter than one movement can be is skipped, in :func:`_skipped`'s words."""
+    from features.repetitions import MIN_PERIOD_S
+
+    return f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
+
+
+def _skipped_reasons(
+    nobody: Sequence[str], short: Sequence[str], no_torso: Sequence[str] = ()
+) -> list[str]:
+    """Why each of ``nobody``, then each of ``short``, was skipped, in :func:`_skipped`'s
+    words: "shows no person", "shows no torso (no frame shows its left hip, right hip)"
+    (``no_torso``: each of ``nobody``'s, as :func:`_skipped` takes them), "shorter than one
+    movement can be (0.4 s)"."""
+    reasons = no_torso if len(no_torso) == len(nobody) else [""] * len(nobody)
+    return [why or "shows no person" for why in reasons] + [_shorter()] * len(short)
 
 
 def _no_case(args: argparse.Namespace, result: Any) -> list[str]:
@@ -1309,6 +1324,15 @@ def _summary(args: argparse.Namespace, result: Any) -> dict[str, Any]:
         "similarity": result.similarity,
         "learned": result.learned,
         "skipped": result.skipped + result.too_short,
+        # each of them with why, as the text's "skipped" lines say it
+        "skipped_reasons": [
+            {"clip": clip, "reason": reason}
+            for clip, reason in zip(
+                result.skipped + result.too_short,
+                _skipped_reasons(result.skipped, result.too_short, args.no_torso),
+                strict=True,
+            )
+        ],
     }
     if result.maintenance is not None:
         summary["trim"] = result.maintenance.summary()
