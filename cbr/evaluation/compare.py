@@ -3,10 +3,12 @@ on the same folds of a labelled dataset, with confidence intervals and a paired 
 
 Protocol
 --------
-- Folds: leave-one-subject-out (``cv="loso"``, default) or stratified k-fold over clips
-  (``cv="kfold"``). LOSO needs a subject for every clip and at least two subjects; otherwise the
-  run falls back to stratified k-fold and says so in ``notes`` (scores are then optimistic,
-  because the same person is in training and test).
+- Folds: leave-one-subject-out (the default, ``cv=None``; ``cv="loso"`` by name) or stratified
+  k-fold over clips (``cv="kfold"``). LOSO needs a subject for every clip and at least two
+  subjects (of the clips left once those showing no person, too short or of a class of a
+  single clip are left out); otherwise the default falls back to stratified k-fold and says so
+  in ``notes`` (scores are then optimistic, because the same person is in training and test),
+  and ``cv="loso"`` is refused.
 - Classes with a single clip are left out (a held-out single clip can never be predicted right,
   and stratification is impossible); the note names them.
 - Target: the activity label (default) or any column of the clip metadata (``correct``,
@@ -35,11 +37,10 @@ from datetime import UTC, datetime
 import numpy as np
 
 from features.clips import Clip
-from features.errors import ConfigError
 
 from ..similarity import get_measure
 from .data import Prepared, prepare
-from .folds import check_k, make_folds, unseen_class_notes
+from .folds import check_k, check_within, make_folds, unseen_class_notes
 from .machine import machine_info
 from .methods import Method, add_covers, methods_for, why_unavailable
 from .results import ClipInfo, CompareResults, CVSummary, DatasetSummary, MethodResult
@@ -60,35 +61,16 @@ class CompareRun:
 
 
 def _folds(
-    data: Prepared, settings: CompareSettings, given: np.ndarray | None
+    data: Prepared, settings: CompareSettings, given: np.ndarray | None, source: str
 ) -> tuple[str, np.ndarray, list[str]]:
-    """Scheme, fold of every clip ``(n,)`` and notes (``given`` overrides the scheme)."""
+    """Scheme, fold of every clip ``(n,)`` and notes (``given`` overrides the scheme;
+    ``source`` is named by a refusal)."""
     if given is not None:
         return "given", np.asarray(given, dtype=np.int64), []
-    scheme, folds, notes = make_folds(data, settings)
+    scheme, folds, notes = make_folds(data, settings, source)
     if scheme == "loso":
         notes += unseen_class_notes(data, folds)
     return scheme, folds, notes
-
-
-def _check_within(data: Prepared, settings: CompareSettings, folds: np.ndarray) -> None:
-    """Refuse model groups (``--within``) each inside one fold: when a group's clips are
-    held out, no clip of it is left to train its model on (``--within subject`` under
-    leave-one-subject-out), and every figure would count a fixed fallback answer."""
-    within = data.within
-    if within is None:
-        return
-    trained = any(
-        bool(np.any((folds != f) & (within == g)))
-        for f, g in set(zip(folds.tolist(), within, strict=True))
-    )
-    if not trained:
-        raise ConfigError(
-            f"every {settings.within_column!r} value's clips lie in one fold, so no model "
-            "per value is ever trained on any clip (each is tested when its fold is held "
-            "out); use `cv='kfold'` or another `within`",
-            "within",
-        )
 
 
 def _fallback_notes(rows: list[MethodResult]) -> list[str]:
@@ -217,9 +199,9 @@ def run_compare(
     ``(n_clips,)`` overrides the fold assignment (tests, fixed splits).
     """
     data = prepare(clips, settings, source)
-    scheme, folds, fold_notes = _folds(data, settings, fold_indices)
+    scheme, folds, fold_notes = _folds(data, settings, fold_indices, source)
     check_k(settings, folds)
-    _check_within(data, settings, folds)
+    check_within(data.within, folds, settings.within_column)
     methods = methods_for(settings)
     skipped, method_notes = _skipped(methods, data, settings)
     active = tuple(mi for mi in range(len(methods)) if mi not in skipped)

@@ -28,7 +28,9 @@ class Prepared:
     subjects ``(n,)`` (None when unknown); labels ``(n,)`` activity labels; within ``(n,)``
     the per-model group (or None); classes: sorted target values; frames ``(n,)``: a clip's
     frames in its file (start, end exclusive) when it is a piece of it (a labels CSV's
-    ``start,end``), else None (empty: none known).
+    ``start,end``), else None (empty: none known); left_out: each clip left out of the
+    comparison, as (name, subject, why: "shows no person", "shorter than one movement can be
+    (0.4 s)", ...).
     """
 
     seqs: list[PoseSequence]
@@ -40,6 +42,7 @@ class Prepared:
     classes: list[str]
     notes: list[str] = field(default_factory=list)
     frames: list[tuple[int, int] | None] = field(default_factory=list)
+    left_out: list[tuple[str, str | None, str]] = field(default_factory=list)
 
     def frames_of(self, i: int) -> tuple[int, int] | None:
         """Clip ``i``'s frames in its file when it is a piece of it, else None."""
@@ -113,14 +116,15 @@ def model_groups(values: Sequence[Any], column: str, source: str) -> np.ndarray:
     return np.array([str(v) for v in values], dtype=object)
 
 
-def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
+def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str], dict[int, str]]:
     """The clips that show a person (some frame shows the torso) for as long as one movement
     can last, and notes naming the others (left out for every method alike: a clip nothing
     can be computed from failed the methods that describe clips, and the comparison crowned
     the others; a clip of a frame or two is what ``classify`` calls unclassifiable). One that
     shows some of the torso's joints, the others in no frame, is said to show no torso,
     naming them (:func:`features.body.no_torso`), as ``classify`` and ``segment`` say it: a
-    clip of the shoulders and arms, the hips out of view, was said to show no person."""
+    clip of the shoulders and arms, the hips out of view, was said to show no person. Also
+    why each clip left out is, by its position."""
     from features.body import no_torso
     from features.repetitions import MIN_PERIOD_S
 
@@ -135,16 +139,22 @@ def _shown(clips: Sequence[Clip]) -> tuple[list[Clip], list[str]]:
         (ids, "that " + (why if len(ids) == 1 else why.replace("shows ", "show ", 1)))
         for why, ids in why_none.items()
     ]
+    shorter = f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"
     if short:
-        gone.append((short, f"shorter than one movement can be ({MIN_PERIOD_S:g} s)"))
+        gone.append((short, shorter))
     notes = [_left_out(clips, ids, why) for ids, why in gone]
-    return [c for i, c in enumerate(clips) if i not in nobody | short], notes
+    whys = {i: why for why, ids in why_none.items() for i in ids} | dict.fromkeys(short, shorter)
+    return [c for i, c in enumerate(clips) if i not in nobody | short], notes, whys
 
 
 def _left_out(clips: Sequence[Clip], gone: set[int], why: str) -> str:
     names = [clips[i].seq.source or str(clips[i].label) for i in sorted(gone)]
     more = " ..." if len(names) > 5 else ""
     return f"left out {counted(len(names), 'clip')} {why}: {', '.join(names[:5])}{more}"
+
+
+#: why a clip of a class of a single clip is left out (:attr:`Prepared.left_out`)
+SINGLE = "the single clip of its class"
 
 
 def _single_clip_note(single: list[str]) -> str:
@@ -163,7 +173,9 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
     view."""
     if not clips:
         raise DataError("no clips found", source)
-    clips, nobody = _shown(clips)
+    listed = clips
+    clips, nobody, whys = _shown(clips)
+    left_out = [(clip_id(c, i), c.subject, whys[i]) for i, c in enumerate(listed) if i in whys]
     if not clips:
         raise DataError(f"no clip to compare: {'; '.join(nobody)}", source)
     y = _targets(clips, settings.target, source)
@@ -171,6 +183,7 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
     counts = Counter(y)
     single = sorted(c for c, n in counts.items() if n < 2)
     idx = [i for i, v in enumerate(y) if counts[v] >= 2]
+    alone = [i for i, v in enumerate(y) if counts[v] < 2]
     classes = sorted({str(v) for v in y[idx]})
     refused = too_few_classes(settings.target, counts, source)
     if refused is not None:
@@ -185,6 +198,7 @@ def prepare(clips: Sequence[Clip], settings: CompareSettings, source: str = "dat
         classes=classes,
         notes=nobody + ([_single_clip_note(single)] if single else []),
         frames=[clip_frames(clips[i]) for i in idx],
+        left_out=left_out + [(clip_id(clips[i], i), clips[i].subject, SINGLE) for i in alone],
     )
 
 

@@ -13,7 +13,7 @@ from features.errors import ConfigError, DataError
 from features.targets import clip_target_of, column_of
 from features.text import counted
 
-from .data import Prepared, model_groups, no_target_error, too_few_classes
+from .data import SINGLE, Prepared, model_groups, no_target_error, too_few_classes
 from .settings import CompareSettings
 
 _OPTIMISTIC = "(optimistic: {} in training and test)"
@@ -29,6 +29,41 @@ def loso_impossible(subjects: Sequence[str | None]) -> str | None:
     if len(distinct) < 2:
         return f"only one subject ({distinct[0]})" if distinct else "no clip"
     return None
+
+
+def loso_refusal(
+    subjects: Sequence[str | None],
+    source: str,
+    left_out: Sequence[tuple[str, str | None, str]] = (),
+) -> ConfigError | None:
+    """The refusal of leave-one-subject-out asked for by name (``cv="loso"``) on clips of
+    these ``subjects`` (None when it is possible): k-fold over clips, the fallback, would give
+    figures of the same person in training and test. ``left_out``: the clips the comparison
+    left out (name, subject, why: :attr:`cbr.evaluation.data.Prepared.left_out`); those of
+    the subjects no clip is left of are named, with why, under each reason."""
+    why = loso_impossible(subjects)
+    if why is None:
+        return None
+    left = {s for s in subjects if s is not None}
+    gone = [(name, s, reason) for name, s, reason in left_out if s is not None and s not in left]
+    if gone:
+        others = sorted({s for _, s, _ in gone})
+        by_why: dict[str, list[str]] = {}
+        for name, _, reason in gone:
+            by_why.setdefault(reason, []).append(name)
+        said = "; ".join(
+            f"{reason}: {', '.join(names[:5])}{' ...' if len(names) > 5 else ''}"
+            for reason, names in by_why.items()
+        )
+        why += (
+            f", once every clip of the {counted(len(others), 'other subject')}"
+            f" ({', '.join(others)}) is left out ({said})"
+        )
+    return ConfigError(
+        f"leave-one-subject-out is impossible in {source}: {why}; `cv='kfold'` cross-validates"
+        " over clips (the same person can be in training and test)",
+        "cv",
+    )
 
 
 def _loso_fallback(subjects: list[str | None], k: int) -> str | None:
@@ -77,13 +112,17 @@ def _stratified(
     return fold, notes
 
 
-def make_folds(data: Prepared, settings: CompareSettings) -> tuple[str, np.ndarray, list[str]]:
+def make_folds(
+    data: Prepared, settings: CompareSettings, source: str = "dataset"
+) -> tuple[str, np.ndarray, list[str]]:
     """The scheme actually used, the fold number of every clip ``(n,)``, and notes.
 
     LOSO: one fold per subject. Stratified k-fold (shuffled, seeded) is used when asked for, or
-    as the fallback when LOSO is impossible (a clip without subject, or a single subject).
+    as the fallback when LOSO is impossible (a clip without subject, or a single subject) and
+    not asked for by name (``cv=None``); asked for by name, that is refused
+    (:func:`loso_refusal`, naming ``source`` and the clips left out of the subjects gone).
     """
-    return fold_numbers(data.y, data.subjects, data.within, settings)
+    return fold_numbers(data.y, data.subjects, data.within, settings, source, data.left_out)
 
 
 def fold_numbers(
@@ -91,11 +130,18 @@ def fold_numbers(
     subjects: Sequence[str | None],
     within: np.ndarray | None,
     settings: CompareSettings,
+    source: str = "dataset",
+    left_out: Sequence[tuple[str, str | None, str]] = (),
 ) -> tuple[str, np.ndarray, list[str]]:
     """:func:`make_folds` of clips of targets ``y``, subjects and model groups ``within``
-    (each ``(n,)``): what the folds depend on, known before the clips are read."""
+    (each ``(n,)``): what the folds depend on, known before the clips are read; ``left_out``
+    the clips left out of them (:func:`loso_refusal`)."""
     notes: list[str] = []
     if settings.cv == "loso":
+        refused = loso_refusal(subjects, source, left_out)
+        if refused is not None:
+            raise refused
+    if settings.cv != "kfold":
         why = _loso_fallback(list(subjects), int(settings.folds))
         if why is None:
             return "loso", _by_subject(list(subjects)), notes
@@ -132,6 +178,26 @@ def check_k(settings: CompareSettings, folds: np.ndarray) -> None:
         )
 
 
+def check_within(within: np.ndarray | None, folds: np.ndarray, column: str | None) -> None:
+    """Refuse model groups (``within`` ``(n,)``, the values of ``column``) each inside one
+    of the ``folds`` ``(n,)``: when a group's clips are held out, no clip of it is left to
+    train its model on (``within="subject"`` under leave-one-subject-out), and every figure
+    would count a fixed fallback answer."""
+    if within is None:
+        return
+    trained = any(
+        bool(np.any((folds != f) & (within == g)))
+        for f, g in set(zip(folds.tolist(), within, strict=True))
+    )
+    if not trained:
+        raise ConfigError(
+            f"every {column!r} value's clips lie in one fold, so no model per value is ever"
+            " trained on any clip (each is tested when its fold is held out); use"
+            " `cv='kfold'` or another `within`",
+            "within",
+        )
+
+
 def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source: str) -> bool:
     """Refuse, from the clips as their dataset lists them (:class:`ListedClip`, nothing decoded),
     what :func:`cbr.evaluation.compare.run_compare` would refuse once every clip is read, in its
@@ -141,9 +207,15 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     leave more folds (a class of two then gone no longer caps them): ``k`` is refused here only
     above what a fold of the clips read could train on (:func:`_most_trained`); and may take a
     group's class of a single clip away with its clip, so k-fold's refusal of one is left to the
-    read. A refusal here is one the read clips get, the counts it names those of the clips
-    listed. Returns whether the listing told all it checks (False: a clip's target or group only
-    a read can tell, or a group's class of a single clip)."""
+    read. Refused here too: leave-one-subject-out asked for by name (``cv="loso"``) when the
+    classes of a single clip listed leave one subject (:func:`loso_refusal`), and under it
+    model groups (``within``) each inside one subject's clips (:func:`check_within`):
+    whichever clips the read leaves out, each group stays inside its subject, or one subject
+    is left, refused. Not asked for by name, a read that leaves one subject falls back to
+    k-fold, which trains every group: that refusal is left to the read. A refusal here is one
+    the read clips get, the counts it names those of the clips listed. Returns whether the
+    listing told all it checks (False: a clip's target or group only a read can tell, or a
+    group's class of a single clip)."""
     if not listed:
         return True
     target = settings.target
@@ -164,6 +236,18 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
         if any(g is None for g in groups):
             return False
         within = model_groups(groups, column, source)
+    return _check_folds(listed, y, within, settings, source)
+
+
+def _check_folds(
+    listed: Sequence[ListedClip],
+    y: np.ndarray,
+    within: np.ndarray | None,
+    settings: CompareSettings,
+    source: str,
+) -> bool:
+    """:func:`check_listed` of the classes and folds of the clips ``listed``, of targets
+    ``y`` and model groups ``within`` (each ``(n,)``)."""
     counts = Counter(y.tolist())
     refused = too_few_classes(settings.target, counts, source)
     if refused is not None:
@@ -171,12 +255,15 @@ def check_listed(listed: Sequence[ListedClip], settings: CompareSettings, source
     kept = np.array([counts[v] >= 2 for v in y])
     subjects = [c.subject for c, keep in zip(listed, kept, strict=True) if keep]
     groups_kept = None if within is None else within[kept]
+    alone = [(c.name, c.subject, SINGLE) for c, keep in zip(listed, kept, strict=True) if not keep]
     try:
-        scheme, folds, _ = fold_numbers(y[kept], subjects, groups_kept, settings)
+        scheme, folds, _ = fold_numbers(y[kept], subjects, groups_kept, settings, source, alone)
     except DataError:  # k-fold over a group's class of a single clip listed: the read may
         return False  # leave that clip out (no person shown, too short), and the class with it
     if int(settings.k) > _most_trained(scheme, folds, int(settings.folds)):
         check_k(settings, folds)
+    if settings.cv == "loso":
+        check_within(groups_kept, folds, settings.within_column)
     return True
 
 

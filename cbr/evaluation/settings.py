@@ -23,8 +23,13 @@ _SET_PER_METHOD = {"features": "features", "similarity": "similarities", "k": "k
 class CompareSettings:
     """What ``compare`` runs.
 
-    target: ``"label"`` or a metadata column; within: train one model per value of this column
-    (``"label"`` by default when the target is not the label; ``None``: one model for all).
+    target: ``"label"`` or a metadata column; cv: ``"loso"`` (leave one subject out, asked for
+    by name: refused, with ConfigError naming ``cv``, on clips of one subject or without one,
+    also when the clips a comparison leaves out leave one subject), ``"kfold"`` (stratified
+    k-fold over clips), or None (the default: leave one subject out, falling back to
+    stratified k-fold with a note when that is impossible; ``"loso"`` in :meth:`to_dict`);
+    within: train one model per value of this column (``"label"`` by default when the target
+    is not the label; ``None``: one model for all).
     k: neighbours of the case-base classifiers; trim: fraction of cases kept by novelty/benefit
     trimming (None: keep all); cbr_params: further ``CaseBaseClassifier`` parameters given to
     every case-base configuration (e.g. ``{"states": "all", "length": 48}``); peer_length:
@@ -37,7 +42,7 @@ class CompareSettings:
     """
 
     target: str = "label"
-    cv: str = "loso"
+    cv: str | None = None
     folds: int = 5
     similarities: tuple[str, ...] = SIMILARITIES
     features: tuple[str, ...] = FEATURE_LEVELS
@@ -60,7 +65,7 @@ class CompareSettings:
         self._check_cbr_params()
 
     def _check_choices(self) -> None:
-        if self.cv not in CV_SCHEMES:
+        if self.cv is not None and self.cv not in CV_SCHEMES:
             raise ParameterError(
                 f"must be one of {', '.join(CV_SCHEMES)}, got {self.cv!r}"
                 f"{did_you_mean(str(self.cv), CV_SCHEMES)}",
@@ -153,8 +158,9 @@ class CompareSettings:
         return self.within or None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready settings, ``within`` resolved."""
+        """JSON-ready settings, ``cv`` and ``within`` resolved."""
         d = dataclasses.asdict(self)
+        d["cv"] = self.cv or "loso"
         d["within"] = self.within_column
         return d
 

@@ -253,8 +253,8 @@ def _check_listed(
             continue
         clips = [c for one in listed for c in one]
         _check_found(args, [c.label for c in clips], [c.subject for c in clips], kw)
-        check_loso_possible(args, clips)
         with as_options(OPTIONS):
+            check_loso_possible(settings, clips, args.data)
             if check_listed(clips, settings, str(args.data)):
                 return
 
@@ -304,22 +304,37 @@ def check_folds_given_with_kfold(args: argparse.Namespace) -> None:
         )
 
 
-def check_loso_possible(args: argparse.Namespace, clips: list[Any]) -> None:
-    """Refuse ``--cv loso`` asked for by name on clips it cannot hold out by subject (one
-    subject, or clips without one): the run fell back to k-fold over clips, whose figures
-    (the same person in training and test) pass for a person's never seen. Not given, the
-    fallback is taken and said in a note."""
-    from cbr.evaluation.folds import loso_impossible
+def check_loso_possible(settings: Any, clips: list[Any], data: Path) -> None:
+    """Refuse ``--cv loso`` asked for by name on clips (of ``data``) it cannot hold out by
+    subject (one subject, or clips without one): the run fell back to k-fold over clips,
+    whose figures (the same person in training and test) pass for a person's never seen. Not
+    given, the fallback is taken and said in a note. Said of ``cv`` (:func:`as_options` says it of
+    ``--cv``); the clips the comparison leaves out are refused so once read, naming them
+    (:func:`cbr.evaluation.folds.make_folds`)."""
+    from cbr.evaluation.folds import loso_refusal
 
-    if args.cv != "loso":
+    if settings.cv != "loso":
         return
-    why = loso_impossible([c.subject for c in clips])
-    if why is not None:
-        raise ConfigError(
-            f"leave-one-subject-out is impossible in {args.data}: {why}; --cv kfold"
-            " cross-validates over clips (the same person can be in training and test)",
-            "--cv",
-        )
+    refused = loso_refusal([c.subject for c in clips], str(data))
+    if refused is not None:
+        raise refused
+
+
+def check_loso_kept(settings: Any, clips: list[Any], data: Path) -> None:
+    """Refuse ``--cv loso`` asked for by name when the clips read of ``data`` the comparison
+    keeps are of one subject (those showing no person, too short, or of a class of a single
+    clip left out: :func:`cbr.evaluation.data.prepare`), naming the clips of the subjects
+    left out, before the comparison's modules are imported: it fell back to k-fold over
+    clips with a note, as when ``--cv`` is not given."""
+    from cbr.evaluation.data import prepare
+    from cbr.evaluation.folds import loso_refusal
+
+    if settings.cv != "loso":
+        return
+    kept = prepare(clips, settings, str(data))
+    refused = loso_refusal(kept.subjects, str(data), kept.left_out)
+    if refused is not None:
+        raise refused
 
 
 #: the arguments of CompareSettings (and of the checks of its values) as compare's options
@@ -345,7 +360,7 @@ def _settings(args: argparse.Namespace) -> Any:
 
     return CompareSettings(
         target=args.target,
-        cv=args.cv or "loso",
+        cv=args.cv,  # None: leave one subject out, or k-fold with a note when impossible
         folds=5 if args.folds is None else args.folds,
         similarities=_names(args.similarities),
         features=_names(args.features),
@@ -669,8 +684,11 @@ def run(args: argparse.Namespace) -> int:
     # said with the results' notes (a refusal on the way is then the one line it is)
     rate_note = assumed_rates_note(assumed_rates(c.seq for c in clips),
                                    give_fps_by_converting(args.data))  # fmt: skip
-    check_loso_possible(args, clips)
+    with as_options(OPTIONS):
+        check_loso_possible(settings, clips, args.data)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
+    with as_options(OPTIONS):
+        check_loso_kept(settings, clips, args.data)
     # the run's modules (scikit-learn among them) after the refusals, which need none of them
     from cbr.evaluation.compare import run_compare
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
