@@ -115,6 +115,33 @@ def test_within_each_subject_under_loso_asked_for_is_refused_from_the_listing(
     assert not out.exists()
 
 
+def test_within_each_subject_without_cv_is_refused_once_read_before_the_comparison(
+    shared_data: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # without --cv the read may leave one subject, and k-fold train every group: refused
+    # once the clips are read, in the same words, but before the comparison (its modules,
+    # scikit-learn among them, imported for it) is run
+    import cbr.evaluation.compare
+
+    data = _uiprmd(shared_data, tmp_path / "data", CLIPS)
+    decoded = _counted(monkeypatch, features.datasets, "read_uiprmd_kinect")
+    compared = _counted(monkeypatch, cbr.evaluation.compare, "run_compare")
+    out = tmp_path / "out"
+    argv = ["compare", str(data), "--within", "subject", "-k", "1", *CHEAP, "--out", str(out)]
+    assert main(argv) == 1
+    assert capsys.readouterr().err == (
+        "posecbr compare: error: --within: every 'subject' value's clips lie in one fold, so no"
+        " model per value is ever trained on any clip (each is tested when its fold is held"
+        " out); use --cv kfold or another --within\n"
+    )
+    assert len(decoded) == 5
+    assert compared == []
+    assert not out.exists()
+
+
 def test_train_json_says_why_each_clip_was_skipped(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -320,21 +320,27 @@ def check_loso_possible(settings: Any, clips: list[Any], data: Path) -> None:
         raise refused
 
 
-def check_loso_kept(settings: Any, clips: list[Any], data: Path) -> None:
-    """Refuse ``--cv loso`` asked for by name when the clips read of ``data`` the comparison
-    keeps are of one subject (those showing no person, too short, or of a class of a single
-    clip left out: :func:`cbr.evaluation.data.prepare`), naming the clips of the subjects
-    left out, before the comparison's modules are imported: it fell back to k-fold over
-    clips with a note, as when ``--cv`` is not given."""
+def check_kept(settings: Any, clips: list[Any], data: Path) -> None:
+    """The refusals of the clips read of ``data`` the comparison keeps (those showing no
+    person, too short, or of a class of a single clip left out:
+    :func:`cbr.evaluation.data.prepare`) under leave-one-subject-out, before the comparison's
+    modules (scikit-learn among them) are imported, in its words: ``--cv loso`` asked for by
+    name on clips of one subject, naming the clips of the subjects left out (it fell back
+    to k-fold over clips with a note, as when ``--cv`` is not given), a ``-k`` above the
+    smallest fold's training clips and ``--within`` groups each inside one fold
+    (:func:`cbr.evaluation.folds.check_k`, :func:`~cbr.evaluation.folds.check_within`).
+    K-fold's folds are left to the comparison, which imports scikit-learn for them."""
     from cbr.evaluation.data import prepare
-    from cbr.evaluation.folds import loso_refusal
+    from cbr.evaluation.folds import check_k, check_within, loso_impossible, make_folds
 
-    if settings.cv != "loso":
+    if settings.cv == "kfold":
         return
     kept = prepare(clips, settings, str(data))
-    refused = loso_refusal(kept.subjects, str(data), kept.left_out)
-    if refused is not None:
-        raise refused
+    if settings.cv is None and loso_impossible(kept.subjects) is not None:
+        return
+    _, folds, _ = make_folds(kept, settings, str(data))  # "loso", or refused
+    check_k(settings, folds)
+    check_within(kept.within, folds, settings.within_column)
 
 
 #: the arguments of CompareSettings (and of the checks of its values) as compare's options
@@ -688,7 +694,7 @@ def run(args: argparse.Namespace) -> int:
         check_loso_possible(settings, clips, args.data)
     check_outputs(outputs, [args.data, *(c.seq.source for c in clips if c.seq.source)])
     with as_options(OPTIONS):
-        check_loso_kept(settings, clips, args.data)
+        check_kept(settings, clips, args.data)
     # the run's modules (scikit-learn among them) after the refusals, which need none of them
     from cbr.evaluation.compare import run_compare
     from cbr.evaluation.misclassified import explain_dad_errors, explain_errors
