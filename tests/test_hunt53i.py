@@ -1,6 +1,6 @@
 """`posecbr compare` under leave-one-subject-out gives, beside the figures that count clips as
 independent, two whose unit is the person: the accuracy's bootstrap interval over the
-subjects (checked against ``scipy.stats.bootstrap`` resampling people) and Wilcoxon's
+subjects and their clips (checked in tests/test_hunt53w.py) and Wilcoxon's
 signed-rank test of the subjects' accuracies against the best (checked against hand-worked
 p-values and an enumeration of every signing written here with exact fractions)."""
 
@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 import pytest
-from scipy.stats import bootstrap
 
 from cbr.evaluation.report import render_html
 from cbr.evaluation.results import CompareResults
-from cbr.evaluation.stats import bootstrap_accuracy, signed_rank
+from cbr.evaluation.stats import signed_rank
 from cbr.evaluation.tables import format_table
+from tests.test_hunt53w import accuracy_over_resamples
 
 
 def _midranks(values: list[Fraction]) -> list[Fraction]:
@@ -87,28 +87,6 @@ def test_signed_rank_against_every_signing() -> None:
         assert got[2] == pytest.approx(float(p), abs=1e-12), exact
 
 
-def test_bootstrap_accuracy_against_scipy_and_by_hand() -> None:
-    right, n = np.array([5, 3, 10, 2, 7]), np.array([6, 6, 12, 4, 7])
-    # scipy's paired percentile bootstrap draws the people as integers(0, g, (B, g)) too
-    ref = bootstrap(
-        (right, n),
-        lambda r, m, axis=-1: r.sum(axis) / m.sum(axis),
-        paired=True,
-        vectorized=True,
-        n_resamples=2000,
-        method="percentile",
-        rng=np.random.default_rng(7),
-    ).confidence_interval
-    lo, hi = bootstrap_accuracy(right, n, n_boot=2000, seed=7)
-    assert (lo, hi) == pytest.approx((ref.low, ref.high), abs=1e-12)
-    # everyone 3/4 right: every resample is 3/4, whatever the clips per person
-    assert bootstrap_accuracy(np.array([3, 6]), np.array([4, 8])) == (0.75, 0.75)
-    # one person wrong on both clips, one right on both: resamples 0, 1/2, 1/2, 1 alike
-    # likely, so the 2.5 % and 97.5 % points are 0 and 1
-    assert bootstrap_accuracy(np.array([0, 2]), np.array([2, 2])) == (0.0, 1.0)
-    assert np.isnan(bootstrap_accuracy(np.array([]), np.array([]))).all()
-
-
 def _people(doc: dict[str, Any], m: dict[str, Any]) -> tuple[list[str], list[int], list[int]]:
     """Subjects (sorted), clips right and clips per subject, from the clips' targets and
     the method's predictions."""
@@ -133,24 +111,22 @@ def test_compare_gives_the_person_as_the_unit(compared_slice: Path) -> None:
     best = doc["best"]
     _, best_right, n = _people(doc, scored[best])
     seed, n_boot = int(doc["settings"]["seed"]), int(doc["settings"]["bootstrap"])
+    clips = doc["clips"]
+    subjects = np.array([c["subject"] for c in clips])
     assert (
-        "people as the unit: the accuracy's 95 % bootstrap over the 3 subjects held out;" in table
+        "people as the unit: the accuracy's 95 % bootstrap over the 3 subjects held out and"
+        " their clips;" in table
     )
     for name, m in scored.items():
         _, right, _ = _people(doc, m)
-        ref = bootstrap(
-            (np.array(right), np.array(n)),
-            lambda r, k, axis=-1: r.sum(axis) / k.sum(axis),
-            paired=True,
-            vectorized=True,
-            n_resamples=n_boot,
-            method="percentile",
-            rng=np.random.default_rng(seed),
-        ).confidence_interval
-        assert m["accuracy_ci_people"] == pytest.approx([ref.low, ref.high], abs=1e-12), name
+        said = zip(clips, m["predictions"], strict=True)
+        correct = np.array([x == c["target"] for c, x in said])
+        # the resamples of macro-F1's interval: the subjects, then each one's clips
+        low, high = accuracy_over_resamples(correct, subjects, n_boot, seed)
+        assert m["accuracy_ci_people"] == pytest.approx([low, high], abs=1e-12), name
         row = rows[name]
-        assert float(row["accuracy_people_lo"]) == pytest.approx(ref.low, abs=1e-6)
-        assert float(row["accuracy_people_hi"]) == pytest.approx(ref.high, abs=1e-6)
+        assert float(row["accuracy_people_lo"]) == pytest.approx(low, abs=1e-6)
+        assert float(row["accuracy_people_hi"]) == pytest.approx(high, abs=1e-6)
         d = [Fraction(x, k) - Fraction(y, k) for x, y, k in zip(right, best_right, n, strict=True)]
         people, w, p = _wilcoxon_by_hand(d)
         assert (m["wilcoxon_vs"], m["wilcoxon_n"]) == (best, people), name
@@ -160,10 +136,10 @@ def test_compare_gives_the_person_as_the_unit(compared_slice: Path) -> None:
         # the printed people table and the report's cells
         head = next(i for i, x in enumerate(table) if "[95 % CI over people]" in x)
         line = next(x for x in table[head:] if x.startswith(name + " "))
-        interval = f"[{100 * ref.low:4.1f}, {100 * ref.high:5.1f}]"
+        interval = f"[{100 * low:4.1f}, {100 * high:5.1f}]"
         assert interval in line, line
         assert line.endswith("best" if name == best else f"{float(p):.3g} ({people})"), line
-        assert f"<td>{100 * ref.low:.1f}–{100 * ref.high:.1f}</td>" in page
+        assert f"<td>{100 * low:.1f}–{100 * high:.1f}</td>" in page
     assert max(len(x) for x in table) <= 100
     assert "Wilcoxon p vs best (people)" in page
 

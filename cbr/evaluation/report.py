@@ -163,8 +163,9 @@ def _person_cell(s: Scores) -> str:
 
 
 def _people_cells(results: CompareResults, m: MethodResult, s: Scores) -> str:
-    """The accuracy's bootstrap interval over the subjects held out, and Wilcoxon's p-value
-    over them against the best (the subjects whose accuracies differ in the tooltip)."""
+    """The accuracy's bootstrap interval over the subjects held out and their clips, and
+    Wilcoxon's p-value over them against the best (the subjects whose accuracies differ in
+    the tooltip)."""
     ci = s.accuracy_ci_people
     cell = "" if ci is None else f"{_pct(ci[0])}–{_pct(ci[1])}"
     w = s.wilcoxon
@@ -412,8 +413,8 @@ def render_html(results: CompareResults, images: Mapping[str, Path]) -> str:
         + (
             "; per person = the accuracy on each subject held out: mean ± sample sd (lowest);"
             " with the person as the unit, the accuracy's 95 % interval from a bootstrap over"
-            " the subjects, and Wilcoxon's signed-rank test of their accuracies against"
-            " the best (n subjects cannot give p below 2/2^n)"
+            " the subjects and their clips, and Wilcoxon's signed-rank test of their"
+            " accuracies against the best (n subjects cannot give p below 2/2^n)"
             if _has_person(results)
             else ""
         )

@@ -127,6 +127,21 @@ class Reader:
             self.fail(f"{where}.{key}", f"must hold two numbers, got {len(vals)}")
         return (vals[0], vals[1])
 
+    def interval(self, obj: dict[str, Any], key: str, where: str) -> tuple[float, float]:
+        """``obj[key]``: an interval of shares, two numbers in [0, 1], the lower first."""
+        lo, hi = self.pair(obj, key, where)
+        if not (0.0 <= lo <= hi <= 1.0):
+            self.fail(f"{where}.{key}", f"must be two shares in [0, 1], the lower first, got"
+                      f" [{lo:g}, {hi:g}]")  # fmt: skip
+        return (lo, hi)
+
+    def count(self, obj: dict[str, Any], key: str, where: str) -> int:
+        """``obj[key]``: a whole number of 0 or more."""
+        v: int = self.get(obj, key, where, "int")
+        if v < 0:
+            self.fail(f"{where}.{key}", f"must be a whole number of 0 or more, got {v}")
+        return v
+
     def picture(self, obj: dict[str, Any], key: str, where: str) -> str:
         """``obj[key]``: a picture's file name, relative and inside the results folder."""
         name = self.get(obj, key, where, "str")
@@ -285,8 +300,8 @@ class Scores:
         if "wilcoxon_vs" in d:
             wilcoxon = SignedRank(
                 r.get(d, "wilcoxon_vs", where, "str"),
-                r.get(d, "wilcoxon_n", where, "int"),
-                r.get(d, "wilcoxon_w", where, "num"),
+                r.count(d, "wilcoxon_n", where),
+                r.amount(d, "wilcoxon_w", where),
                 r.share(d, "wilcoxon_p", where),
             )
         confusion = [
@@ -316,7 +331,7 @@ class Scores:
             if "per_subject" in d
             else {},
             # absent under k-fold and in a file written before they were given
-            accuracy_ci_people=r.pair(d, "accuracy_ci_people", where)
+            accuracy_ci_people=r.interval(d, "accuracy_ci_people", where)
             if "accuracy_ci_people" in d
             else None,
             wilcoxon=wilcoxon,
@@ -786,8 +801,9 @@ class CompareResults:
         return results
 
     def check(self, r: Reader) -> None:
-        """What the keys say of each other: methods to report, the best ones among them, and
-        each method's confusion matrix and predictions the size of the classes and clips."""
+        """What the keys say of each other: methods to report, the best ones among them,
+        each method's confusion matrix and predictions the size of the classes and clips,
+        and Wilcoxon's people no more than the subjects held out."""
         if not self.methods:
             r.fail("methods", "lists no method: nothing to report")
         names = [m.name for m in self.methods]
@@ -812,3 +828,7 @@ class CompareResults:
                         f"{where}.{key}", f"must hold one per clip ({n_clips}), got {len(values)}"
                     )
             _check_per_subject(r, s, where, self.clips)
+            if s.wilcoxon is not None and s.wilcoxon.n > len(s.per_subject):
+                r.fail(f"{where}.wilcoxon_n",
+                       f"counts {s.wilcoxon.n} subjects whose accuracies differ, more than the"
+                       f" {len(s.per_subject)} in per_subject")  # fmt: skip

@@ -46,13 +46,11 @@ def _per_subject(subjects: np.ndarray | None, correct: np.ndarray) -> dict[str, 
 def _people_ci(
     subjects: np.ndarray | None, correct: np.ndarray, settings: CompareSettings
 ) -> tuple[float, float] | None:
-    """The accuracy's bootstrap interval over the subjects held out; None without them."""
+    """The accuracy's bootstrap interval over the subjects held out and their clips (the
+    resamples of macro-F1's interval); None without them."""
     if subjects is None:
         return None
-    _, person = np.unique(subjects, return_inverse=True)
-    right = np.bincount(person.ravel(), weights=correct.astype(float))
-    n = np.bincount(person.ravel())
-    return bootstrap_accuracy(right, n, int(settings.bootstrap), seed=int(settings.seed))
+    return bootstrap_accuracy(correct, subjects, int(settings.bootstrap), seed=int(settings.seed))
 
 
 def _mean_case_base(results: list[FoldResult]) -> float | None:
@@ -71,8 +69,8 @@ def score(
     """The figures of one method from its predictions ``(n,)`` of every clip's target.
 
     subjects: ``(n,)`` every clip's subject under leave-one-subject-out: macro-F1's bootstrap
-    resamples them whole, the accuracy is given per subject and with a bootstrap interval
-    over the subjects; None (k-fold) to resample clips, with neither.
+    resamples them, then their clips, the accuracy is given per subject and with a bootstrap
+    interval over the same resamples; None (k-fold) to resample clips, with neither.
 
     A prediction outside the target classes (e.g. DAD's answer for an activity the target
     does not name) counts as wrong and is kept in ``unassigned``.

@@ -61,8 +61,8 @@ def _legend(results: CompareResults, person: bool) -> list[str]:
 
 def _people(results: CompareResults, width: int) -> list[str]:
     """Under leave-one-subject-out, the figures whose unit is the person: the accuracy's
-    bootstrap interval over the subjects and Wilcoxon's test of their accuracies against the
-    best (n: the subjects whose accuracies differ); none without."""
+    bootstrap interval over the subjects and their clips and Wilcoxon's test of their
+    accuracies against the best (n: the subjects whose accuracies differ); none without."""
     ok = [(m, s) for m, s in results.scored() if s.accuracy_ci_people is not None]
     if not ok:
         return []
@@ -76,7 +76,8 @@ def _people(results: CompareResults, width: int) -> list[str]:
         lines.append(f"{m.name:<{width}} {acc:<33} {pv:>14}".rstrip())
     n = len(ok[0][1].per_subject)
     return lines + [
-        f"people as the unit: the accuracy's 95 % bootstrap over the {n} subjects held out;",
+        f"people as the unit: the accuracy's 95 % bootstrap over the {n} subjects held out and"
+        " their clips;",
         "Wilcoxon's signed-rank test of their accuracies against the best (n: the subjects",
         "whose accuracies differ; n subjects cannot give p below 2/2^n, 0.25 for 3, 0.0625 for 5)",
     ]
@@ -175,8 +176,8 @@ def _figures(s: Scores, classes: list[str]) -> dict[str, Any]:
 def csv_rows(results: CompareResults) -> list[dict[str, Any]]:
     """One row per method: the table's figures (``mcnemar_vs``: the best method, tested
     against; ``accuracy_people_lo``, ``accuracy_people_hi``: the accuracy's bootstrap
-    interval over the subjects held out, ``wilcoxon_p``, ``wilcoxon_n``: Wilcoxon's test
-    over them against the best; ``person_mean``, ``person_sd``, ``person_min``,
+    interval over the subjects held out and their clips, ``wilcoxon_p``, ``wilcoxon_n``:
+    Wilcoxon's test over them against the best; ``person_mean``, ``person_sd``, ``person_min``,
     ``person_max``: the accuracy over the subjects held out; all empty under k-fold),
     per-class recall (``recall:CLASS``), with model groups the accuracy per group printed
     under the table (``accuracy:GROUP``), the accuracy per subject held out
