@@ -1,7 +1,7 @@
 """How often `compare`'s bootstrap intervals over people hold the population's figure.
 
-Run: ``python -m benchmarks.bootstrap_coverage [--reps 400] [--seed 53]`` (about three
-minutes on a shared core). Writes ``benchmarks/results/bootstrap_coverage.json``.
+Run: ``python -m benchmarks.bootstrap_coverage [--reps 400] [--seed 53]`` (3 to 7
+minutes on one of two shared cores). Writes ``benchmarks/results/bootstrap_coverage.json``.
 
 Simulated leave-one-subject-out outcomes with a known spread between people: 3 balanced
 classes; person i gets a clip of class k right with chance ``expit(logit(mu_k) + sigma *
