@@ -450,7 +450,7 @@ def _learn(
     new_class = label not in set(cb.labels.tolist())
     dec = decide_retention(
         cb,
-        values,
+        solved.problem,  # its fills of features never shown left out, as solve leaves them
         label,
         scale=clf.novelty_.scale,
         k=int(clf.k),
@@ -463,7 +463,7 @@ def _learn(
     rev = None
     if not dec.retained:
         rev = plan_revision(
-            cb, values, label, rate=settings.rate, relabel_margin=settings.relabel_margin
+            cb, solved.problem, label, rate=settings.rate, relabel_margin=settings.relabel_margin
         )
     digest = poses_digest(clip)  # what tells a copy of it (train --append)
     with store.transaction() as tx:
@@ -473,7 +473,11 @@ def _learn(
             why = f"not retained: the same frames and poses as case #{twin}, stored already"
             dec = RetainDecision(False, dec.novelty, dec.benefit, why)
             rev = plan_revision(
-                cb, values, label, rate=settings.rate, relabel_margin=settings.relabel_margin
+                cb,
+                solved.problem,
+                label,
+                rate=settings.rate,
+                relabel_margin=settings.relabel_margin,
             )
         case_id = record_retention(
             tx,

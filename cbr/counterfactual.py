@@ -60,14 +60,27 @@ class Counterfactual:
     plausibility: float
 
 
-def _squared(cb: CaseBase, diff: np.ndarray) -> np.ndarray:
+def _squared(cb: CaseBase, diff: np.ndarray, measured: np.ndarray | None = None) -> np.ndarray:
     """Squared differences ``(..., *problem_shape)`` under the measure's learned weights (when
-    it has them)."""
+    it has them); 0 where the problem's value is not ``measured`` (a fill the distance leaves
+    out, :meth:`cbr.problem.Problem.measured`)."""
     mult = getattr(cb.measure, "multiplier", None)
     shape = cb.problems.shape[1:]
     if mult is not None and len(mult) == int(np.prod(shape)):
         diff = diff * np.asarray(mult, dtype=np.float64).reshape(shape)
+    if measured is not None:
+        diff = diff * np.asarray(measured, dtype=np.float64).reshape(shape)
     return np.asarray(diff**2, dtype=np.float64)
+
+
+def _distances(cb: CaseBase, values: np.ndarray, measured: np.ndarray | None) -> np.ndarray:
+    """``(n_cases,)`` distances from problem ``values`` over its ``measured`` values (None:
+    all), as retrieval ranks them (:func:`cbr.retrieve.query_distances`)."""
+    measure = cb.measure
+    query = measure.represent_query(np.asarray(values))
+    if measured is None:
+        return measure.distances(query, cb.index)
+    return measure.distances_measured(query, cb.index, measured)
 
 
 def _per_feature(view: View, sq: np.ndarray) -> np.ndarray:
@@ -79,16 +92,28 @@ def _per_feature(view: View, sq: np.ndarray) -> np.ndarray:
     return out
 
 
-def gains(cb: CaseBase, view: View, q: np.ndarray, g: np.ndarray, rivals: np.ndarray) -> np.ndarray:
+def gains(
+    cb: CaseBase,
+    view: View,
+    q: np.ndarray,
+    g: np.ndarray,
+    rivals: np.ndarray,
+    measured: np.ndarray | None = None,
+) -> np.ndarray:
     """How much copying each feature of guide ``g`` into problem ``q`` helps the guide win
     over the ``rivals`` ``(r, *problem_shape)`` (the nearest cases of other labels): the
     squared distance to the guide falls by ``(q - g)^2`` and to a rival grows by
-    ``(g - n)^2 - (q - n)^2`` (weighted, summed per feature, averaged over the rivals)."""
-    toward = _per_feature(view, _squared(cb, q - g))
+    ``(g - n)^2 - (q - n)^2`` (weighted, summed per feature, averaged over the rivals; over
+    the ``measured`` values alone: a feature the clip never showed gains nothing)."""
+    toward = _per_feature(view, _squared(cb, q - g, measured))
     if len(rivals) == 0:
         return toward
     away = np.mean(
-        [_per_feature(view, _squared(cb, g - n) - _squared(cb, q - n)) for n in rivals], axis=0
+        [
+            _per_feature(view, _squared(cb, g - n, measured) - _squared(cb, q - n, measured))
+            for n in rivals
+        ],
+        axis=0,
     )
     return np.asarray(toward + away, dtype=np.float64)
 
@@ -123,23 +148,27 @@ def _label_scale(cb: CaseBase, label: str) -> float:
     return scale
 
 
-def plausibility(cb: CaseBase, values: np.ndarray, label: str) -> float:
-    """Distance of problem ``values`` to its nearest case of ``label`` over the label's usual
-    nearest-case distance."""
-    measure = cb.measure
-    d = measure.distances(measure.represent_query(np.asarray(values)), cb.index)
+def plausibility(
+    cb: CaseBase, values: np.ndarray, label: str, measured: np.ndarray | None = None
+) -> float:
+    """Distance of problem ``values`` (over its ``measured`` values: :func:`_distances`) to
+    its nearest case of ``label`` over the label's usual nearest-case distance."""
+    d = _distances(cb, values, measured)
     d = np.where(cb.labels.astype(str) == label, d, np.inf)
     return float(d.min()) / _label_scale(cb, label)
 
 
 def _nearest(
-    cb: CaseBase, values: np.ndarray, label: str, n_guides: int = GUIDES
+    cb: CaseBase,
+    values: np.ndarray,
+    label: str,
+    n_guides: int = GUIDES,
+    measured: np.ndarray | None = None,
 ) -> tuple[list[int], np.ndarray]:
     """Positions of the ``n_guides`` nearest real cases of ``label`` (mirror images of
     training clips, flagged in the last column, are no real case) and of the :data:`RIVALS`
-    nearest cases of other labels."""
-    measure = cb.measure
-    d = measure.distances(measure.represent_query(np.asarray(values)), cb.index)
+    nearest cases of other labels (over the ``measured`` values: :func:`_distances`)."""
+    d = _distances(cb, values, measured)
     is_label = cb.labels.astype(str) == label
     real = np.ones(len(cb), dtype=bool)
     if cb.names and cb.names[-1] == MIRROR_FLAG and cb.problems.ndim == 2:
@@ -158,11 +187,12 @@ def _search(
     rivals: np.ndarray,
     label: str,
     answer: Answer,
+    measured: np.ndarray | None = None,
 ) -> list[int] | None:
     """The fewest features (toward guide ``g``, most helpful first: :func:`gains`) after
     which the classifier answers ``label``, with every unneeded change undone; None within
     :data:`MAX_CHANGES`."""
-    gain = gains(cb, view, q, g, cb.problems[rivals])
+    gain = gains(cb, view, q, g, cb.problems[rivals], measured)
     order = [int(f) for f in np.argsort(-gain, kind="stable") if gain[f] > 0]
     chosen: list[int] | None = None
     for n in range(1, min(MAX_CHANGES, len(order)) + 1):
@@ -184,15 +214,27 @@ class _Vectors:
     one plus ``delta[:, f]``, so the vote after each possible change is computed for all
     features of every kept set at once, one vote a step (the classifier's own vote,
     :func:`cbr.reuse.vote`; each candidate's k nearest cases chosen alone, as the vote of
-    that problem chooses them)."""
+    that problem chooses them). ``measured`` (None: all): the query's values its distances
+    compare, the rest weighted 0 and the sum scaled by ``D / m``, as
+    :meth:`cbr.similarity.euclidean.Euclidean.distances_measured` scales it."""
 
     def __init__(
-        self, cb: CaseBase, view: View, q: np.ndarray, k: int, weights: Weights, balanced: bool
+        self,
+        cb: CaseBase,
+        view: View,
+        q: np.ndarray,
+        k: int,
+        weights: Weights,
+        balanced: bool,
+        measured: np.ndarray | None = None,
     ):
         mult = getattr(cb.measure, "multiplier", None)
         centre = getattr(cb.measure, "centre", None)
         D = cb.problems.shape[1]
         w = np.ones(D) if mult is None else np.asarray(mult, dtype=np.float64) ** 2
+        if measured is not None:
+            keep = np.asarray(measured, dtype=bool).reshape(D)
+            w = np.where(keep, w * (D / max(int(keep.sum()), 1)), 0.0)
         shift = np.zeros(D) if centre is None else np.asarray(centre, dtype=np.float64)
         self.C = cb.problems - shift
         self.q = q - shift
@@ -295,33 +337,38 @@ def counterfactual(
     k: int = 5,
     weights: Weights = "distance",
     balanced: bool = False,
+    measured: np.ndarray | None = None,
 ) -> Counterfactual:
     """The sparsest valid counterfactual of problem ``values`` toward ``label`` over the
     :data:`GUIDES` (sequences: :data:`SEQUENCE_GUIDES`) nearest real cases of ``label``.
     ``answer`` classifies a problem as the classifier does (its retrieve and reuse: the final
     check); ``k`` and ``weights`` are its vote, which the search of vector problems under
     euclidean distance follows exactly (``balanced``: each class's votes divided by its share
-    of the cases, :func:`cbr.reuse.class_balance`)."""
+    of the cases, :func:`cbr.reuse.class_balance`); ``measured`` (None: all) the values the
+    classifier's distances compare (:meth:`cbr.problem.Problem.measured`: the fills of
+    features the clip never showed left out, by the search too, and by ``answer``)."""
     view = view_of(cb)
     q = np.asarray(values, dtype=np.float64)
     exact = (
-        _Vectors(cb, view, q, k, weights, balanced)
+        _Vectors(cb, view, q, k, weights, balanced, measured)
         if q.ndim == 1 and getattr(cb.measure, "name", "") == "euclidean"
         else None
     )
     best: tuple[int, float, int, list[int], np.ndarray] | None = None
-    guides, rivals = _nearest(cb, q, label, GUIDES if exact is not None else SEQUENCE_GUIDES)
+    guides, rivals = _nearest(
+        cb, q, label, GUIDES if exact is not None else SEQUENCE_GUIDES, measured
+    )
     for g in guides:
         if exact is not None:
             found = exact.search(g, label)
         else:
-            found = _search(cb, view, q, cb.problems[g], rivals, label, answer)
+            found = _search(cb, view, q, cb.problems[g], rivals, label, answer, measured)
         if found is None:
             continue
         changed = _changed(view, q, cb.problems[g], found)
         if answer(changed) != label:
             continue
-        plaus = plausibility(cb, changed, label)
+        plaus = plausibility(cb, changed, label, measured)
         if best is None or (len(found), plaus) < (best[0], best[1]):
             best = (len(found), plaus, g, found, changed)
     if best is None:

@@ -1242,13 +1242,15 @@ class CaseBaseClassifier(Classifier):
         )
         raise ParameterError(f"must be {said}, got {target!r}{guess}", "target")
 
-    def answer(self, values: np.ndarray) -> str:
+    def answer(self, values: np.ndarray | Problem) -> str:
         """The label the classifier gives a problem ``values`` (retrieve and reuse, as
-        :meth:`solve` does): how counterfactuals are checked."""
+        :meth:`solve` does; a :class:`Problem`'s fills of features its clip never showed left
+        out of the distances, as there): how counterfactuals are checked."""
         check_fitted(self, "case_base_")
         self._check_vote()
         self.case_base_.check_not_empty("case_base_")
-        r = retrieve(self.case_base_, np.asarray(values), int(self.k))
+        query = values if isinstance(values, Problem) else np.asarray(values)
+        r = retrieve(self.case_base_, query, int(self.k))
         classes = self._class_labels()
         self._check_known(r.labels, set(classes.tolist()))
         balance = self._balance(self.case_base_.labels, classes)

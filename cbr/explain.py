@@ -735,7 +735,7 @@ def _cf_line(contrast: Contrast, name: str, shown: int) -> str:
 def explain(
     cb: CaseBase,
     solved: Solved,
-    answer: Callable[[np.ndarray], str],
+    answer: Callable[[np.ndarray | Problem], str],
     *,
     target: str | None = None,
     unlike_ratio: float | None = None,
@@ -866,7 +866,7 @@ def _contrast(
     r: _Reading,
     problem: Problem,
     other: tuple[int, float],
-    answer: Callable[[np.ndarray], str],
+    answer: Callable[[np.ndarray | Problem], str],
     k: int,
     weights: Weights,
     search: bool = True,
@@ -879,7 +879,16 @@ def _contrast(
     other_label = str(cb.labels[pos])
     if not search:
         return Contrast(other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), position=pos)
-    cf = counterfactual(cb, np.asarray(problem.values), other_label, answer, k, weights, balanced)
+    # the counterfactual compares what the classification compared: a feature the clip never
+    # showed is left out of its distances (Problem.measured), checked by answer the same way
+    measured = problem.measured() if cb.measure.leaves_out else None
+
+    def checked(values: np.ndarray) -> str:
+        return answer(values if measured is None else dataclasses.replace(problem, values=values))
+
+    cf = counterfactual(
+        cb, np.asarray(problem.values), other_label, checked, k, weights, balanced, measured
+    )
     changes = [] if cf.guide is None else change_claims(r, cf, cb.problems[cf.guide])
     return Contrast(
         other_label, int(cb.ids[pos]), cb.sources[pos], float(dist), tuple(changes), cf.valid,

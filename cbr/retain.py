@@ -47,16 +47,14 @@ def novelty(cb: CaseBase, problem: Problem | np.ndarray, scale: float) -> float:
         or not (math.isfinite(float(scale)) and float(scale) > 0.0)
     ):
         raise ConfigError(f"must be a finite number > 0, got {scale!r}", "scale")
-    values = problem.values if isinstance(problem, Problem) else problem
-    return float(retrieve(cb, values, 1).distances[0]) / scale
+    return float(retrieve(cb, problem, 1).distances[0]) / scale
 
 
 def benefit(
     cb: CaseBase, problem: Problem | np.ndarray, label: str, k: int, weights: Weights = "distance"
 ) -> float:
-    values = problem.values if isinstance(problem, Problem) else problem
     classes = np.unique(np.append(cb.labels.astype(str), str(label)))
-    sol = reuse(retrieve(cb, values, k), classes, weights)
+    sol = reuse(retrieve(cb, problem, k), classes, weights)
     return float(1.0 - sol.proba[list(classes).index(str(label))])
 
 
@@ -73,9 +71,8 @@ def decide_retention(
 ) -> RetainDecision:
     """Whether the observation ``problem`` labelled ``label`` should become a case (nothing is
     changed: :func:`retain` or :func:`record_retention` carry it out)."""
-    values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
-    nov = novelty(cb, values, scale)
-    ben = benefit(cb, values, label, k, weights)
+    nov = novelty(cb, problem, scale)
+    ben = benefit(cb, problem, label, k, weights)
     ok = nov >= novelty_threshold and ben >= benefit_threshold
     why = (
         f"novelty {nov:.3g} {'>=' if nov >= novelty_threshold else '<'} {novelty_threshold:g}, "
@@ -101,7 +98,7 @@ def retain(
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     dec = decide_retention(
         cb,
-        values,
+        problem,
         label,
         scale=scale,
         k=k,

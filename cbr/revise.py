@@ -70,10 +70,9 @@ def plan_revision(
     """The revision the observation ``problem`` labelled ``true_label`` calls for (nothing is
     changed yet: :func:`apply_revision` or :func:`record_revision` carry it out)."""
     _check_rate(rate)
-    values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     true_label = str(true_label)
     assert cb.ids is not None
-    r = retrieve(cb, values, 1)
+    r = retrieve(cb, problem, 1)  # the fills of features never shown left out, as solve does
     i, d = int(r.indices[0]), float(r.distances[0])
     if cb.labels[i] == true_label:
         why = f"nearest case has the true label {true_label!r}; moved toward the observation "
@@ -83,7 +82,7 @@ def plan_revision(
     same = np.flatnonzero(cb.labels == true_label)
     j, dj = -1, np.inf
     if len(same):
-        near = retrieve(cb.subset(same), values, 1)
+        near = retrieve(cb.subset(same), problem, 1)
         j, dj = int(same[near.indices[0]]), float(near.distances[0])
     old = str(cb.labels[i])
     if d < relabel_margin * dj:
@@ -131,7 +130,7 @@ def revise(
 ) -> Revision:
     """Adjust ``cb`` in place toward the observation ``problem`` labelled ``true_label``."""
     values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
-    rev = plan_revision(cb, values, true_label, rate=rate, relabel_margin=relabel_margin)
+    rev = plan_revision(cb, problem, true_label, rate=rate, relabel_margin=relabel_margin)
     apply_revision(cb, rev, values)
     return rev
 

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -119,3 +120,62 @@ def test_a_clip_computed_a_piece_at_a_time_knows_the_columns_it_never_showed(
     pieces = extract_problem(legless, config, 16)
     assert whole.unseen and pieces.unseen == whole.unseen
     np.testing.assert_allclose(pieces.values, whole.values, atol=1e-9)
+
+
+def _label_by_hand(clf: CaseBaseClassifier, d: np.ndarray) -> str:
+    """The label the k nearest cases at distances ``d`` vote, each by 1 / distance."""
+    labels = np.asarray(clf.case_base_.labels).astype(str)
+    near = np.argsort(d, kind="stable")[: int(clf.k)]
+    votes: dict[str, float] = {}
+    for i in near:
+        votes[labels[i]] = votes.get(labels[i], 0.0) + 1.0 / float(d[i])
+    return max(sorted(votes), key=lambda lab: votes[lab])
+
+
+def test_feedback_and_counterfactuals_leave_out_the_fills_the_answer_left_out(
+    cmu_windows: tuple[CaseBaseClassifier, PoseSequence, PoseSequence],
+) -> None:
+    # one query, one answer (hunt 53v): the legless twist's feedback (retain's novelty and
+    # benefit, revise's nearest case) and its counterfactual compared its fills, which solve
+    # leaves out: the nearest case at 13.9 and a KneeRaise answer instead of 7.3 and Twist
+    from cbr.counterfactual import counterfactual
+    from cbr.retain import decide_retention
+    from cbr.revise import plan_revision
+
+    clf, _, legless = cmu_windows
+    solved = clf.solve([legless], flag=False)[0]
+    problem, cb = solved.problem, clf.case_base_
+    measured = problem.measured()
+    assert measured is not None
+
+    def by_hand(values: np.ndarray) -> np.ndarray:
+        query = np.where(measured, np.asarray(values).reshape(-1), np.nan)
+        return nan_euclidean_distances(query[None], np.asarray(cb.problems).reshape(len(cb), -1))[0]
+
+    want = by_hand(problem.values)
+    assert clf.answer(problem) == _label_by_hand(clf, want) == "Twist"
+    revision = plan_revision(cb, problem, "Twist")
+    assert revision.index == int(np.argmin(want))
+    assert revision.distance == pytest.approx(float(want.min()), rel=1e-5)
+    decision = decide_retention(cb, problem, "Twist", scale=1.0)
+    assert decision.novelty == pytest.approx(float(want.min()), rel=1e-5)
+    # the counterfactual toward another label, checked as the answer is: by the distances
+    # over the columns shown, and it changes no column the clip never showed
+    contrast = clf.explain_solved(solved).contrast
+    assert contrast is not None
+    other = contrast.label
+    cf = counterfactual(
+        cb,
+        np.asarray(problem.values),
+        other,
+        lambda v: clf.answer(dataclasses.replace(problem, values=v)),
+        int(clf.k),
+        measured=measured,
+    )
+    assert cf.answer == _label_by_hand(clf, by_hand(cf.values))
+    unshown = ~measured
+    np.testing.assert_array_equal(
+        cf.values.reshape(-1)[unshown], problem.values.reshape(-1)[unshown]
+    )
+    # the explanation's counterfactual is that one: its check says what the answer says
+    assert (contrast.answer, contrast.valid) == (cf.answer, cf.answer == other)
