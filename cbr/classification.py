@@ -31,7 +31,7 @@ from .described import poses_digest
 from .estimator import CaseBaseClassifier, Solved, too_short, unclassifiable
 from .explain import Explanation
 from .retain import RetainDecision, decide_retention, record_retention
-from .revise import Revision, plan_revision, record_revision
+from .revise import Revision, observed, plan_revision, record_revision
 from .stored import StoredClassifier, judges_after_change, load_classifier, write_matrices
 
 if TYPE_CHECKING:
@@ -491,7 +491,9 @@ def _learn(
             skeleton=skeleton_of(clip),
             poses=digest,
         )
-        new = record_revision(tx, info, rev, values) if rev is not None else None
+        new = (  # the case not moved toward the fills of features the clip never showed
+            record_revision(tx, info, rev, observed(solved.problem)) if rev is not None else None
+        )
         changed = case_id is not None or _revised(rev)
         if changed:
             judges_after_change(tx, info)

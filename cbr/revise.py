@@ -110,14 +110,34 @@ def plan_revision(
     )
 
 
+def observed(problem: Problem | np.ndarray) -> np.ndarray:
+    """The values of ``problem`` a case is moved toward: NaN where the value is the fill of a
+    feature its clip never showed (:meth:`cbr.problem.Problem.measured`), which is no
+    observation to move a case toward."""
+    if not isinstance(problem, Problem):
+        return np.asarray(problem)
+    values = np.asarray(problem.values, dtype=np.float64)
+    measured = problem.measured()
+    if measured is None:
+        return values
+    return np.where(measured.reshape(values.shape), values, np.nan)
+
+
+def _moved(p: np.ndarray, observation: np.ndarray, rate: float) -> np.ndarray:
+    """Case ``p`` moved by ``rate`` toward ``observation``; where the observation is missing
+    (NaN: :func:`observed`) the case keeps its value."""
+    obs = np.asarray(observation, dtype=np.float64).reshape(np.shape(p))
+    return np.asarray(p + rate * np.where(np.isnan(obs), 0.0, obs - p))
+
+
 def apply_revision(cb: CaseBase, rev: Revision, observation: np.ndarray) -> None:
-    """Carry out ``rev`` on the in-memory case base (``observation``: the problem values)."""
+    """Carry out ``rev`` on the in-memory case base (``observation``: the problem values,
+    NaN where not observed: :func:`observed`)."""
     _check_rate(rev.rate)
     if rev.action == "relabelled":
         cb.set_label(rev.index, rev.new_label)
     elif rev.action == "moved":
-        p = cb.problems[rev.index]
-        cb.set_problem(rev.index, p + rev.rate * (np.asarray(observation) - p))
+        cb.set_problem(rev.index, _moved(cb.problems[rev.index], observation, rev.rate))
 
 
 def revise(
@@ -129,9 +149,8 @@ def revise(
     relabel_margin: float = 0.5,
 ) -> Revision:
     """Adjust ``cb`` in place toward the observation ``problem`` labelled ``true_label``."""
-    values = problem.values if isinstance(problem, Problem) else np.asarray(problem)
     rev = plan_revision(cb, problem, true_label, rate=rate, relabel_margin=relabel_margin)
-    apply_revision(cb, rev, values)
+    apply_revision(cb, rev, observed(problem))
     return rev
 
 
@@ -142,7 +161,8 @@ def record_revision(
 
     A move is applied to the case as it is in the store NOW (read and locked in this
     transaction), not to this process's copy: ``p <- p + rate (q - p)`` on the stored ``p``, so
-    concurrent revisions of one case all take effect. A case trimmed or relabelled meanwhile
+    concurrent revisions of one case all take effect (where ``q`` is NaN, a fill the clip
+    never showed: :func:`observed`, ``p`` stays). A case trimmed or relabelled meanwhile
     is neither moved nor relabelled (:class:`StaleCaseError`: the caller reads the cases
     again): the revision was decided on its label as read. Returns the case's new problem
     (None when no problem changed)."""
@@ -166,8 +186,7 @@ def record_revision(
                 tx.store.where,
             )
         if rev.action == "moved":
-            obs = np.asarray(observation, dtype=np.float64).reshape(current.features.shape)
-            new = current.features + rev.rate * (obs - current.features)
+            new = _moved(current.features, observation, rev.rate)
             tx.update_case(info, rev.case_id, features=new)
         else:
             tx.update_case(info, rev.case_id, label=rev.new_label)

@@ -179,3 +179,26 @@ def test_feedback_and_counterfactuals_leave_out_the_fills_the_answer_left_out(
     )
     # the explanation's counterfactual is that one: its check says what the answer says
     assert (contrast.answer, contrast.valid) == (cf.answer, cf.answer == other)
+
+
+def test_a_revision_moves_a_case_toward_what_the_clip_showed_not_toward_its_fills(
+    cmu_windows: tuple[CaseBaseClassifier, PoseSequence, PoseSequence],
+) -> None:
+    # the legless twist's nearest case is a Twist: revised with rate 0.25 it moved every
+    # value a quarter of the way toward the clip's, its knees toward the fills' 90 degrees
+    # (hunt 53v); now the values the clip showed move, p + 0.25 (q - p), the others stay
+    from cbr.revise import revise
+
+    clf, _, legless = cmu_windows
+    problem = clf.solve([legless], flag=False)[0].problem
+    cb = clf.case_base_.subset(np.arange(len(clf.case_base_)))  # a copy to revise
+    measured = problem.measured()
+    assert measured is not None
+    rev = revise(cb, problem, "Twist", rate=0.25)
+    assert rev.action == "moved"
+    before = np.asarray(clf.case_base_.problems[rev.index], dtype=np.float64).reshape(-1)
+    q = np.asarray(problem.values, dtype=np.float64).reshape(-1)
+    after = np.asarray(cb.problems[rev.index], dtype=np.float64).reshape(-1)
+    np.testing.assert_allclose(after[measured], before[measured] + 0.25 * (q - before)[measured])
+    np.testing.assert_array_equal(after[~measured], before[~measured])
+    assert not np.allclose(q[~measured], before[~measured])  # the fills would have moved them
