@@ -346,24 +346,30 @@ def read(cb: CaseBase, problem: Problem) -> _Reading:
     view = view_of(cb)
     x = view.of(np.asarray(problem.values, dtype=np.float64)[None])[0]
     if "importance" not in cb.cache:
-        cb.cache["importance"] = _importance(cb, view)
+        # filled aside and put in the cache at once: another thread explaining with the same
+        # case base (watch's verdicts, judged on a thread of their own, while the frame loop
+        # explains a segment) finds all of it or none
         units = [quantity(n, 0.0)[1] for n in view.names]
-        cb.cache["angles"] = np.array([u == "degrees" for u in units])
-        cb.cache["readable"] = np.array(
-            [(view.binary[j] and "@" not in n) or (units[j] in READABLE and "@std" not in n)
-             for j, n in enumerate(view.names)]
-        )  # fmt: skip
-        cb.cache["states"] = np.array([u == "share" for u in units])
-        cb.cache["state_means"] = np.array(
-            [j for j, nm in enumerate(view.names)
-             if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))],
-            dtype=np.intp,
-        )  # fmt: skip
-        cb.cache["qmps"] = np.flatnonzero(
-            view.binary & np.array(["@" not in n for n in view.names], dtype=bool)
-        )
-        # of the whole case base, the same for every clip: read once, not per explanation
-        cb.cache["seen"] = (view.of(cb.problems) >= SEEN_FRACTION).mean(axis=0)
+        filled = {
+            "importance": _importance(cb, view),
+            "angles": np.array([u == "degrees" for u in units]),
+            "readable": np.array(
+                [(view.binary[j] and "@" not in n) or (units[j] in READABLE and "@std" not in n)
+                 for j, n in enumerate(view.names)]
+            ),
+            "states": np.array([u == "share" for u in units]),
+            "state_means": np.array(
+                [j for j, nm in enumerate(view.names)
+                 if nm.endswith("@mean") and not nm.startswith((ANGLE_PREFIX, POSITION_PREFIX))],
+                dtype=np.intp,
+            ),
+            "qmps": np.flatnonzero(
+                view.binary & np.array(["@" not in n for n in view.names], dtype=bool)
+            ),
+            # of the whole case base, the same for every clip: read once, not per explanation
+            "seen": (view.of(cb.problems) >= SEEN_FRACTION).mean(axis=0),
+        }  # fmt: skip
+        cb.cache.update(filled)
     known = np.array([n.split("@", 1)[0] not in problem.unseen for n in view.names], dtype=bool)
     return _Reading(
         cb, view, profiles_of(cb), x, cb.cache["importance"], bool(problem.mirrored),
