@@ -240,7 +240,8 @@ class Euclidean(SimilarityMeasure):
         q = np.asarray(query_rep).reshape(-1)
         if not np.isfinite(q[cols]).all():
             raise InputError("euclidean: the query holds NaN or inf")
-        row: np.ndarray = measured_distances(index.rows, q.astype(index.rows.dtype), cols)
+        q = np.where(keep, q, 0.0).astype(index.rows.dtype)  # a value left out weighs 0
+        row: np.ndarray = measured_distances(index.rows, q, keep.astype(np.float64))
         return row
 
     def nearest(self, query_rep: np.ndarray, index: Any, k: int) -> tuple[np.ndarray, np.ndarray]:
