@@ -15,7 +15,10 @@ each averages), not where the window that decided it ends. Its repetitions are c
 its frames as ``segment`` counts a segment cut there (the signals read the frames kept either
 side too, :meth:`LiveSegmenter._in_context`), each repetition in the one segment that holds
 where its movement turns (:func:`cbr.segmentation.keep_whole`,
-:func:`cbr.segmentation.unclaimed`).
+:func:`cbr.segmentation.unclaimed`). A window whose frames show the shoulders and arms but
+neither hip (the hips out of view: a camera close up, a patient seated) is judged on the arms
+(:func:`_shown`), as ``segment`` judges a recording shown from the shoulders up, and its
+frames show the person; a window where a hip is seen is judged as before.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from features.body import TORSO_JOINTS, torso_seen, torso_share
+from features.body import TORSO_JOINTS, arms_alone, shoulders_only, torso_seen, torso_share
 from features.derived import stretch
 from features.errors import DataError, InputError, PoseFileError
 from features.poses import MAX_FPS, MIN_FPS, PoseSequence
@@ -528,6 +531,7 @@ class LiveSegmenter:
         # nobody in view (a segment of its own, as offline: cbr.segmentation.nobody_blocks):
         self.nobody = self.unknown + 1  # its label seen
         self.torso = [BLAZEPOSE_33.index(j) for j in TORSO_JOINTS]
+        self.hips = self.torso[2:]  # blanked in the context of a window without them
         self.least_blind = MIN_SEGMENT_S * self.fps  # frames: a shorter dropout is not one
         # whether a frame shows the person: the majority of the frames around it that show
         # the torso (as offline, sighting_width: a glitch of the pose model is not), known
@@ -725,7 +729,8 @@ class LiveSegmenter:
         sighting of the frame :attr:`glitch` frames back is known now (of the stream's first
         :attr:`glitch` frames, when twice as many are pushed: each is read over the first
         frames of the stream, as offline)."""
-        self.sightings.append(bool(torso_seen(frame[self.torso])))
+        torso = frame[self.torso]  # the person: the torso, or the shoulders without the hips
+        self.sightings.append(bool(torso_seen(torso) or shoulders_only(torso)))
         end = self.n + 1
         while end > 2 * self.glitch and end - self.looked > self.glitch:
             self._sighted(end)
@@ -733,7 +738,8 @@ class LiveSegmenter:
     def _sighted(self, end: int) -> None:
         """Whether frame :attr:`looked` shows the person, the frames up to ``end``
         (exclusive) pushed: the majority of the frames within :attr:`glitch` of it that show
-        the torso, as :func:`cbr.segmentation.nobody_blocks` reads it
+        the torso, or both shoulders and neither hip (the hips out of view), as
+        :func:`cbr.segmentation.nobody_blocks` reads it
         (:func:`features.body.majority`: nearer the stream's ends, of as many frames nearest
         that end); and the runs of frames without the person followed with it."""
         i, first = self.looked, end - len(self.sightings)  # first: the frame sightings[0] is
@@ -1055,7 +1061,7 @@ class LiveSegmenter:
         self.found = {f for f in self.found if f[1] > n - 2 * self.span} | set(new)
         self.period_votes = [w for w in self.period_votes if w[1] > n - 2 * self.span]
         clips = [self._with_context(b, c) for b, c in new]
-        shown = [(w, clip) for w, clip in zip(new, clips, strict=True) if torso_share(clip) > 0]
+        shown = [(w, clip) for w, clip in zip(new, clips, strict=True) if _shown(clip)]
         if not shown:
             return
         solved = self.clf.solve([clip for _, clip in shown], flag=False)
@@ -1111,7 +1117,7 @@ class LiveSegmenter:
         (:func:`cbr.segmentation.decode_activities`): one like none, across a change of
         movement or of one the case base lacks, is nearest to whichever lies least far."""
         window = self._with_context(n - self.window, n)
-        if torso_share(window) == 0.0:  # no person: no evidence either way
+        if not _shown(window):  # no person: no evidence either way
             return np.full(self.unknown, 1.0 / self.unknown), 0.5
         solved = self.clf.solve([window], flag=False)[0]
         return self._judged(solved, n - self.window, n)  # the judge: unknown
@@ -1131,7 +1137,8 @@ class LiveSegmenter:
         first = max(self.offset, a - self.window)
         if first == a:
             return self._sequence(a, b)
-        whole = self._sequence(first, b)
+        # a window without the hips is judged on its arms, its context read without them too
+        whole = self._sequence(first, b, hipless=arms_alone(self._sequence(a, b)))
         config = self.clf.feature_config_
         warm(whole, config.level, mirror=config.side == "canonical")
         return stretch(whole, a - first, b - first)
@@ -1223,8 +1230,9 @@ class LiveSegmenter:
         reps = self._count_kept(int(start), self.n, (False, False))
         return tuple((int(r.start_frame), int(r.end_frame)) for r in reps)
 
-    def _sequence(self, a: int, b: int) -> PoseSequence:
-        """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped)."""
+    def _sequence(self, a: int, b: int, hipless: bool = False) -> PoseSequence:
+        """Stream frames [a, b) as a clip (``a`` >= :attr:`offset`: frames not yet dropped);
+        ``hipless``: with the hips missing in every frame (the frames kept are not changed)."""
         if a < self.offset or b <= a:
             raise DataError(f"stream frames {a}-{b} are no longer kept (from {self.offset})",
                             self.source)  # fmt: skip
@@ -1234,8 +1242,11 @@ class LiveSegmenter:
         if any(c is not None for c in seen):  # a frame without stays unknown (NaN)
             confidence = np.stack([np.full(len(BLAZEPOSE_33), np.nan) if c is None else c
                                    for c in seen])  # fmt: skip
+        positions = np.stack(rows)  # a copy
+        if hipless:
+            positions[:, self.hips] = np.nan
         return PoseSequence(
-            np.stack(rows), BLAZEPOSE_33, self.fps, confidence=confidence, source=self.source
+            positions, BLAZEPOSE_33, self.fps, confidence=confidence, source=self.source
         )
 
     def _confidence(self, state: int) -> float:
@@ -1310,7 +1321,7 @@ class LiveSegmenter:
         edges = (first == 0, not cut and explained)
         if end > first:
             clip = self._sequence(first, end)
-            if torso_share(clip) == 0.0:
+            if not _shown(clip):
                 state = self.unknown
             try:
                 reps = self._count_apart(first, end, edges)
@@ -1860,7 +1871,7 @@ class LiveSegmenter:
         person in view in enough frames to follow a movement (joint angles missing)")."""
         if self.offset or not self.n or self.n < MIN_WINDOW_S * self.fps:
             return []
-        if torso_share(self._sequence(0, self.n)) == 0.0:
+        if not _shown(self._sequence(0, self.n)):
             return [self._segment(0, self.n, self.nobody, False)]
         jumps = {"frames": list(self.jumps)}  # counted apart, as segment reads a pose file's
         found = segment(self.clf, self._sequence(0, self.n).with_metadata(person_jumps=jumps),
@@ -1870,6 +1881,16 @@ class LiveSegmenter:
                         s.explanation, s.novelty)
             for s in found.segments
         ]  # fmt: skip
+
+
+def _shown(clip: PoseSequence) -> bool:
+    """Whether stream frames ``clip`` (a window, a repetition's, a segment's) show the
+    person: the torso in some frame, judged whole as before; or, the hips out of view, the
+    arms without a hip in any frame (:func:`features.body.arms_alone`), judged on the arms as
+    ``segment`` judges a recording shown from the shoulders up
+    (:func:`cbr.segmentation.shoulders_up`; the stream's windows each tell, a stream having
+    no whole-recording fact)."""
+    return torso_share(clip) > 0.0 or arms_alone(clip)
 
 
 def _of_world(said: re.Match[str]) -> str:

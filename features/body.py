@@ -406,6 +406,17 @@ def arms_alone(seq: PoseSequence) -> bool:
     return bool((shoulders & seen[:, 4:].any(axis=-1)).any())
 
 
+def shoulders_only(torso: np.ndarray) -> np.ndarray:
+    """``(...)`` whether each pose of ``torso`` ``(..., 4, 3)`` (the :data:`TORSO_JOINTS`, in
+    order) shows both shoulders, distinct as the torso's must be, and neither hip (the hips
+    out of view): the person seen from the shoulders up, whose arms the frame of the
+    shoulders and the world's up follows (:func:`features.geometry.shoulder_axes`). A pose
+    with one hip seen is not (:func:`arms_alone`)."""
+    hips = np.isfinite(torso[..., 2:, :]).all(axis=-1).any(axis=-1)
+    shoulders = norm(torso[..., 0, :] - torso[..., 1, :]) >= MIN_LINK_M  # NaN: False
+    return np.asarray(shoulders & ~hips)
+
+
 def shown_rows(seq: PoseSequence, alone: bool) -> np.ndarray:
     """``(frames,)`` whether each frame shows the person: the torso (:func:`torso_rows`),
     or, of a recording shown from the shoulders up (``alone``: :func:`arms_alone` with no

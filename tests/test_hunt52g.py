@@ -121,20 +121,29 @@ def test_watch_says_once_when_the_hips_go_out_of_view(
 ) -> None:
     """Frame by frame as ``watch`` pushes them: the whole video's first 2 s (the hips seen:
     nothing said), then the jumping jacks without hips: said once, when the shoulders have
-    been seen without the hips for a second (25 frames at 25 fps), from 2.00 s."""
+    been seen without the hips for a second (25 frames at 25 fps), from 2.00 s: labelled from
+    the arms alone (hunt 53h; before, "no activity is labelled without the torso"). With one
+    hip seen there is no torso and no arms alone (:func:`features.body.arms_alone`): the
+    stretch is nobody in view, as before, and the note says so."""
     assert jumping_jacks.fps == 25.0
     whole = bundled_poses(TWO_PEOPLE).to_canonical().positions[:50]
-    w = _watcher(jumping_jacks.fps)
-    for frame in [*whole, *jumping_jacks.positions]:
-        w._hips(frame)
-        w.n += 1
-        if w.n in (50, 74):  # the hips seen; then one frame short of a second without them
-            assert capsys.readouterr().err == ""
-    assert capsys.readouterr().err.splitlines() == [
-        "note: close_up.mp4: the hips are out of view from 2.00 s (the shoulders are seen): no"
-        " activity is labelled without the torso, and a stretch without it is given as nobody"
-        " in view"
-    ]
+    one_hip = jumping_jacks.positions.copy()
+    one_hip[:, JOINT_INDEX["left_hip"]] = whole[-1, JOINT_INDEX["left_hip"]]
+    for then, said in [
+        (jumping_jacks.positions, "labelled from the arms alone while they are"),
+        (one_hip, "no activity is labelled without the torso, and a stretch without it is"
+                  " given as nobody in view"),
+    ]:  # fmt: skip
+        w = _watcher(jumping_jacks.fps)
+        for frame in [*whole, *then]:
+            w._hips(frame)
+            w.n += 1
+            if w.n in (50, 74):  # the hips seen; then one frame short of a second without them
+                assert capsys.readouterr().err == ""
+        assert capsys.readouterr().err.splitlines() == [
+            "note: close_up.mp4: the hips are out of view from 2.00 s (the shoulders are seen):"
+            f" {said}"
+        ]
 
 
 def test_watch_names_the_hips_when_no_frame_showed_the_torso() -> None:

@@ -741,6 +741,7 @@ class Watcher:
         self.hips_out = 0  # frames in a row showing the shoulders, not the hips (:meth:`_hips`)
         self.said_hips_out = False  # the note that the hips are out of view is said once
         self.no_hips = False  # a frame showed the shoulders without the hips
+        self.hip_in_run = False  # a frame of that run showed one hip (no arms alone)
         self.is_file = False  # a video file (here or served), not a camera or live stream
         self.stdout_gone = False  # the reader of the printed segments has gone: stop
         self.latency = Latencies()  # frame to label, tallied: bounded on any stream
@@ -1021,8 +1022,12 @@ class Watcher:
     def _hips(self, world: Any) -> None:
         """Say once, on stderr, that the hips are out of view when the shoulders have been seen
         without them for :data:`cbr.segmentation.MIN_SEGMENT_S` (a camera close up, the
-        patient seated): without the torso no activity is labelled, and such a stretch is
-        given as nobody in view, which alone told the user nothing of why."""
+        patient seated): neither hip seen, the labels stand on the arms alone while they are
+        out (:mod:`cbr.live` judges a window without them on its arms, as ``segment`` judges
+        a recording shown from the shoulders up; before, no activity was labelled and such a
+        stretch was given as nobody in view); one hip seen, no activity is labelled without
+        the torso and such a stretch is given as nobody in view, which alone told the user
+        nothing of why."""
         import numpy as np
 
         from cbr.segmentation import MIN_SEGMENT_S
@@ -1031,15 +1036,21 @@ class Watcher:
         joints = ("left_shoulder", "right_shoulder", "left_hip", "right_hip")
         seen = np.isfinite(world[[JOINT_INDEX[j] for j in joints]]).all(axis=1)
         self.hips_out = self.hips_out + 1 if seen[:2].all() and not seen[2:].all() else 0
+        self.hip_in_run = self.hips_out > 0 and (self.hip_in_run or bool(seen[2:].any()))
         self.no_hips = self.no_hips or self.hips_out > 0
         if self.said_hips_out or self.hips_out < MIN_SEGMENT_S * self.live.fps:
             return
         self.said_hips_out = True
         start_s = (self.n + 1 - self.hips_out) / self.live.fps
+        said = (
+            "no activity is labelled without the torso, and a stretch without it is given as"
+            " nobody in view"
+            if self.hip_in_run
+            else "labelled from the arms alone while they are"
+        )
         print(
             f"note: {shown(self.args.source)}: the hips are out of view from {start_s:.2f} s"
-            " (the shoulders are seen): no activity is labelled without the torso, and a"
-            " stretch without it is given as nobody in view",
+            f" (the shoulders are seen): {said}",
             file=sys.stderr,
         )
 
