@@ -641,15 +641,16 @@ def _angle(u: Vec, v: Vec, min_len: float) -> float:
 @_compiled(cache=True, nogil=True)
 def state_signal_values(
     p: np.ndarray, joints: np.ndarray, near_a: np.ndarray, near_b: np.ndarray,
-    min_len: float, hipless: bool, values: np.ndarray, head_length: np.ndarray,
-    dist_m: np.ndarray,
+    min_len: float, hipless: bool, upright_head: float, values: np.ndarray,
+    head_length: np.ndarray, dist_m: np.ndarray,
 ) -> None:  # fmt: skip
     """Fill the signals of :func:`features.signals.state_signals` from canonical positions.
 
     p: ``(frames, 33, 3)``; joints: canonical indices of (nose, left/right ear, shoulder,
     elbow, wrist, hip, knee, ankle) in that order; near_a/near_b: ``(n_pairs,)`` joint indices;
     hipless: the frame of the shoulders and the world's up (a clip without hips,
-    :func:`features.geometry.shoulder_axes`), the armpit angle from its down.
+    :func:`features.geometry.shoulder_axes`), the armpit angle from its down, none where
+    the head leans more than upright_head (radians) from the world's up.
     Writes values ``(frames, 22 + n_pairs)`` (angles in ANGLE_SIGNALS order, then distances in
     head-lengths), head_length ``(frames,)`` metres and dist_m ``(frames, n_pairs)`` metres.
     """
@@ -666,6 +667,8 @@ def state_signal_values(
             left = _unit(_sub(ls, rs), min_len)
             up = _unit(_project(up_w, left), min_len)
             forward = _unit(_cross(left, up), min_len)
+            if _angle(_sub(mid_ear, neck), up_w, min_len) > upright_head:  # lying, bent over
+                left = up = forward = (np.nan, np.nan, np.nan)
         else:
             forward = _unit(_cross(_sub(rs, ls), _sub(lh, ls)), min_len)
             up = _unit(_sub(neck, mid_hip), min_len)

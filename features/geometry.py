@@ -108,7 +108,7 @@ def body_frame(positions: np.ndarray, hipless: bool = False) -> BodyFrame:
     mid_hip = midpoint(lh, rh)
     mid_ear = midpoint(_joint(positions, "left_ear"), _joint(positions, "right_ear"))
     if hipless:
-        forward, up, left = shoulder_axes(ls, rs)
+        forward, up, left = shoulder_axes(ls, rs, mid_ear)
     else:
         # -⊥torso = (LS→RS) × (LS→LH): the chest-facing normal in a right-handed frame.
         forward = unit(np.cross(rs - ls, lh - ls))
@@ -119,7 +119,17 @@ def body_frame(positions: np.ndarray, hipless: bool = False) -> BodyFrame:
     return BodyFrame(forward, up, left, heading, level_left, neck, mid_hip, mid_ear)
 
 
-def shoulder_axes(ls: np.ndarray, rs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+UPRIGHT_HEAD = np.radians(60.0)
+"""The farthest the head's line (neck to mid-ear) leans from the world's up in a frame whose
+trunk :func:`shoulder_axes` takes to be upright: an upright person's neck bends the head
+less far forward or back (about 45-50 degrees either way); a head further over is one of a
+trunk lying or bent over, whose arms the upright frame would state wrongly (arms by the
+sides of a person lying on their back read "in front")."""
+
+
+def shoulder_axes(
+    ls: np.ndarray, rs: np.ndarray, mid_ear: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Body axes (forward, up, left) ``(frames, 3)`` each from the shoulders ``(frames, 3)``
     and the world's up, for a clip without hips: ``left`` along the shoulder line (right to
     left shoulder), ``up`` the world's up less its part along that line (the trunk taken to
@@ -127,11 +137,16 @@ def shoulder_axes(ls: np.ndarray, rs: np.ndarray) -> tuple[np.ndarray, np.ndarra
     cross product (``left × up``, the way the chest faces). The hips' frame has ``left``
     along the shoulders too (``up × forward`` of the torso's plane); what the shoulders cannot
     give is the trunk's lean forward or back, which this frame reads as none. NaN where a
-    shoulder is missing or the shoulder line is vertical."""
+    shoulder is missing, the shoulder line is vertical, or the head (``mid_ear``, the
+    midpoint of the ears) leans more than :data:`UPRIGHT_HEAD` from the world's up (the
+    trunk is not upright: a person lying or bent over); a frame without the ears is taken
+    to be upright."""
     left = unit(ls - rs)
     up = unit(project(np.broadcast_to(WORLD_UP, left.shape), left))
     forward = unit(np.cross(left, up))
-    return forward, up, left
+    over = angle_between(mid_ear - midpoint(ls, rs), WORLD_UP) > UPRIGHT_HEAD  # NaN: False
+    keep = ~over[..., None]
+    return np.where(keep, forward, np.nan), np.where(keep, up, np.nan), np.where(keep, left, np.nan)
 
 
 def hips_unseen(positions: np.ndarray) -> bool:

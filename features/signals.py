@@ -17,6 +17,7 @@ from features.errors import ConfigError
 
 from .geometry import (
     MIN_LINK_M,
+    UPRIGHT_HEAD,
     angle_between,
     body_frame,
     hips_unseen,
@@ -231,6 +232,7 @@ def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba
             _NEAR_B,
             MIN_LINK_M,
             hipless,
+            float(UPRIGHT_HEAD),
             values,
             head_length,
             dist_m,
