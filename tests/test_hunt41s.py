@@ -120,8 +120,9 @@ def test_describe_names_the_missing_hips_and_describes_what_needs_no_body_frame(
     lines = _out(capsys, ["describe", str(clip)]).splitlines()
     assert lines[1] == (
         "no torso (left hip, right hip missing in every frame): the arms and head are"
-        " described in the frame of the shoulders and the world's up, nothing that needs the"
-        " hips (classify, segment and reps judge the arms alone)"
+        " described in the frame of the shoulders and the world's up where the head is upright"
+        " (not lying or bent over), nothing that needs the hips (classify, segment and reps"
+        " judge the arms alone)"
     )
     assert not any("knee" in ln for ln in lines[3:])
 

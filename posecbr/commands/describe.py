@@ -167,7 +167,8 @@ def _no_torso_line(missing: str, arms: bool) -> str:
     if arms:
         return (
             f"no torso ({missing} missing in every frame): the arms and head are described in"
-            " the frame of the shoulders and the world's up, nothing that needs the hips"
+            " the frame of the shoulders and the world's up where the head is upright (not"
+            " lying or bent over), nothing that needs the hips"
             " (classify, segment and reps judge the arms alone)"
         )
     return (
