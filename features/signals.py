@@ -206,17 +206,21 @@ _KERNEL_JOINTS = np.array(
 )  # fmt: skip
 
 
-def state_signals(seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba") -> StateSignals:
+def state_signals(
+    seq: PoseSequence, backend: Literal["numba", "numpy"] = "numba", shoulders: bool = True
+) -> StateSignals:
     """Every fluent's angle and distance for every frame of ``seq`` (any joint set). A clip
     that shows neither hip in any frame (:func:`features.geometry.hips_unseen`) is measured
-    in the frame of its shoulders and the world's up (:data:`HIPLESS`).
+    in the frame of its shoulders and the world's up (:data:`HIPLESS`); with ``shoulders``
+    False it is not (every angle that needs the body frame unavailable, as for any clip
+    without the hips before that frame existed: DAD's rules, written for the whole body).
 
     ``backend``: ``"numba"`` one compiled pass over the frames
     (:func:`features._fluent_kernels.state_signal_values`), ``"numpy"`` the whole-array
     reference built from :mod:`features.geometry`.
     """
     p = expect_sequence(seq).to_canonical().positions
-    hipless = hips_unseen(p)
+    hipless = shoulders and hips_unseen(p)
     if backend == "numba":
         from ._fluent_kernels import state_signal_values
 

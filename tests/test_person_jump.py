@@ -276,9 +276,13 @@ def test_segment_and_reps_count_jacks_cut_between_two_far_points_as_by_hand(
     capsys.readouterr()
     assert main(["segment", str(path), "--db", str(case_base), "--json"]) == 0
     segments = json.loads(capsys.readouterr().out)["segments"]
-    assert [s["label"] for s in segments] == ["JumpJack"]
+    # jumping jacks, or unknown at the end: the video shows no shin, and where the knees too
+    # are out of the picture for a whole 2-s window the window is told by what it shows
+    # (hunt 53a), its nearest JumpJack there 0.89 as far as its nearest ArmCircle
+    labels = [s["label"] for s in segments]
+    assert labels[0] == "JumpJack" and set(labels) <= {"JumpJack", None}, labels
     assert sum(s["count"] for s in segments) == by_hand
-    for a, b in segments[0]["repetition_frames"]:
+    for a, b in (r for s in segments for r in s["repetition_frames"]):
         assert b <= cut or a >= cut, (a, b)
     assert main(["reps", str(path), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)

@@ -127,7 +127,13 @@ def test_watch_counts_apart_at_a_jump_as_segment_and_by_hand(
         offline = _segmented(save_pose(seq, tmp_path / f"cut{cut}.npz"), case_base)
         assert sum(s.repetitions for s in live) == by_hand, (cut, live)
         assert sum(s["count"] for s in offline) == by_hand, (cut, offline)
-        # the jump ends no segment in either: one segment of jumping jacks
+        # the jump ends no segment in either: one segment of jumping jacks in watch; segment
+        # may say unknown after a change that is not at the jump, where a 2-s window never
+        # shows the knees (segment leaves such columns out of the distance since hunt 53a,
+        # watch does not yet)
         assert [(s.start_frame, s.end_frame, s.label) for s in live] == [
-            (s["start_frame"], s["end_frame"], s["label"]) for s in offline
+            (0, seq.n_frames, "JumpJack")
         ]
+        assert offline[0]["start_frame"] == 0 and offline[0]["label"] == "JumpJack"
+        assert all(s["label"] in ("JumpJack", None) for s in offline), offline
+        assert all(abs(s["start_frame"] - cut) > 30 for s in offline[1:]), offline

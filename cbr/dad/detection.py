@@ -164,7 +164,9 @@ def detect(
     duration = seq.positions.shape[0] / seq.fps
     if duration < cfg.min_duration_s:
         return _unjudged(seq.source, seq.fps, duration, db, _too_short(duration, cfg))
-    signals = state_signals(seq, backend=backend)
+    # the ADD's QMPs are written for the whole body: a clip without hips is not read in
+    # the upright frame of its shoulders (an arms-hanging sneak crowned from the arms)
+    signals = state_signals(seq, backend=backend, shoulders=False)
     return detect_signals(signals.values, signals.names, seq.fps, db, cfg, source=seq.source)
 
 

@@ -828,7 +828,8 @@ class CompareResults:
                         f"{where}.{key}", f"must hold one per clip ({n_clips}), got {len(values)}"
                     )
             _check_per_subject(r, s, where, self.clips)
-            if s.wilcoxon is not None and s.wilcoxon.n > len(s.per_subject):
+            # a file written before per_subject was has none to count against
+            if s.wilcoxon is not None and s.per_subject and s.wilcoxon.n > len(s.per_subject):
                 r.fail(f"{where}.wilcoxon_n",
                        f"counts {s.wilcoxon.n} subjects whose accuracies differ, more than the"
                        f" {len(s.per_subject)} in per_subject")  # fmt: skip
