@@ -188,13 +188,6 @@ class RepetitionVerdicts:
             return spans
         return tuple(s for s in spans[:-1] if n - s[1] >= settle)
 
-    def _judge(self, span: tuple[int, int]) -> Verdict:
-        """Repetition ``span`` judged here and now; the count goes on after it."""
-        piece = self.live.clip(*span)
-        judged = classify_clip(self.stored, piece, None, self.stored.target)
-        self._go_on(span)
-        return Verdict(len(self.given) + 1, span[0], span[1], judged, float(self.live.fps))
-
     def _go_on(self, span: tuple[int, int]) -> None:
         """The count goes on after ``span``, the latest repetition asked for, from the start
         of the one asked for before it: as in a count of the whole stream, the next one

@@ -47,13 +47,15 @@ def test_a_verdict_before_a_rise_of_the_rate_keeps_its_times(
     stored = SimpleNamespace(target="correct")
     slow = SimpleNamespace(fps=15.0, clip=lambda a, b: None)
     first = RepetitionVerdicts(stored, slow)  # type: ignore[arg-type]
-    first.given.append(first._judge((15, 30)))
+    first._ask((15, 30))
+    first.ready()  # given, as watch reads it
     line = first.given[0].to_dict()
     assert (line["repetition"], line["start_s"], line["end_s"]) == (1, 1.0, 2.0)
     fast = SimpleNamespace(fps=30.0, clip=lambda a, b: None)
     again = RepetitionVerdicts(stored, fast, first)  # type: ignore[arg-type]
     assert again.judged_to == 60  # the first's end, frame 30 at 15 fps, at 30 fps
-    again.given.append(again._judge((90, 120)))
+    again._ask((90, 120))
+    again.ready()
     # the count goes on from the start of the one before the last judged: the first's frame
     # 15 at 15 fps, frame 30 at 30 fps
     assert again.anchor == 30

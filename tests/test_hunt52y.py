@@ -46,6 +46,21 @@ class _Segmenter:
         return []
 
 
+def rise_with_a_drop_out() -> list[Any]:
+    """The stream's frames: 15 fps for 2 s (a burst at 1.6 s: frames 20-24 come at once),
+    then 60 fps, the frames taken within 2.55-2.87 s lost (a drop-out), ending at 2.88 s."""
+    taken = np.concatenate([np.arange(30) / 15.0, 2.0 + np.arange(54) / 60.0])
+    came = taken.copy()
+    came[20:25] = taken[24]
+    sent = ~((taken > 2.55) & (taken < 2.0 + 52 / 60.0 - 1e-9))
+    frames = []
+    for j, i in enumerate(np.flatnonzero(sent)):
+        frame = _frame(j, came[i], taken[i])
+        frame.read_at, frame.last = 0.0, False
+        frames.append(frame)
+    return frames
+
+
 def test_a_rise_taken_among_the_frames_held_at_the_end_is_watched_again_at_it(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -62,15 +77,7 @@ def test_a_rise_taken_among_the_frames_held_at_the_end_is_watched_again_at_it(
     last frame reached the grid). Before, the last frame
     was dropped and the stream followed on its 15-fps grid."""
     monkeypatch.setattr("cbr.live.LiveSegmenter", _Segmenter)
-    taken = np.concatenate([np.arange(30) / 15.0, 2.0 + np.arange(54) / 60.0])
-    came = taken.copy()
-    came[20:25] = taken[24]
-    sent = ~((taken > 2.55) & (taken < 2.0 + 52 / 60.0 - 1e-9))
-    frames = []
-    for j, i in enumerate(np.flatnonzero(sent)):
-        frame = _frame(j, came[i], taken[i])
-        frame.read_at, frame.last = 0.0, False
-        frames.append(frame)
+    frames = rise_with_a_drop_out()
     args = argparse.Namespace(source="0", max_frames=None, out=None, show=False, k=1)
     watcher = Watcher(None, None, args, None)
     with pytest.raises(DataError, match="the stream ended after"):
@@ -81,6 +88,7 @@ def test_a_rise_taken_among_the_frames_held_at_the_end_is_watched_again_at_it(
     poses = np.array(watcher.live.poses)
     before = np.arange(math.floor(2.55 * fps) + 1) / fps  # the grid times before the pause
     np.testing.assert_allclose(poses[: len(before)], before, atol=1e-9)
+    taken = 2.0 + np.arange(52, 54) / 60.0  # the stream's last two frames' times
     assert taken[-2] < poses[-1] <= taken[-1] + 1e-9  # the last frame reached the grid
 
 

@@ -24,8 +24,7 @@ from features.errors import DataError
 from features.readers.asfamc import read_asf_amc
 from posecbr.commands.watch import BURST_S, CHANGE_WINDOW_S, Watcher, _frame_rate
 from tests.once import made_once
-from tests.test_hunt49e import _frame
-from tests.test_hunt52y import _Segmenter
+from tests.test_hunt52y import _Segmenter, rise_with_a_drop_out
 from tests.test_watch import _cmu_13_29_windows
 
 FPS = 10.0
@@ -125,15 +124,7 @@ def test_a_rise_with_a_drop_out_before_the_end_is_watched_again_at_its_rate(
     (the frames of the latest 0.8 s over their span, the pause in it: 30 intervals in 0.8
     s)."""
     monkeypatch.setattr("cbr.live.LiveSegmenter", _Segmenter)
-    taken = np.concatenate([np.arange(30) / 15.0, 2.0 + np.arange(54) / 60.0])
-    came = taken.copy()
-    came[20:25] = taken[24]
-    sent = ~((taken > 2.55) & (taken < 2.0 + 52 / 60.0 - 1e-9))
-    frames = []
-    for j, i in enumerate(np.flatnonzero(sent)):
-        frame = _frame(j, came[i], taken[i])
-        frame.read_at, frame.last = 0.0, False
-        frames.append(frame)
+    frames = rise_with_a_drop_out()
     args = argparse.Namespace(source="0", max_frames=None, out=None, show=False, k=1)
     watcher = Watcher(None, None, args, None)
     with pytest.raises(DataError, match="the stream ended after"):
